@@ -1,0 +1,112 @@
+//! `cargo xtask ci` and `cargo xtask bench`.
+//!
+//! The CI step list is the single source of truth: `.ci/run` lists the same commands literally,
+//! and the test `ci_script_matches_steps` below fails if the two (or the README) drift apart.
+
+use std::process::Command;
+
+use crate::workspace_root;
+
+/// The test command the README gives a newcomer. `.ci/run` must run exactly this.
+pub(crate) const TEST_COMMAND: &str = "cargo test --workspace";
+
+/// Every CI step as (description, program and arguments, extra environment).
+pub(crate) const STEPS: &[(&str, &str, &[(&str, &str)])] = &[
+    ("format", "cargo fmt --all -- --check", &[]),
+    (
+        "lints",
+        "cargo clippy --workspace --all-targets -- -D warnings",
+        &[],
+    ),
+    ("tests", TEST_COMMAND, &[]),
+    (
+        "docs",
+        "cargo doc --workspace --no-deps",
+        &[("RUSTDOCFLAGS", "-D warnings")],
+    ),
+    ("quick validation", "cargo xtask validate --quick", &[]),
+];
+
+pub(crate) fn run(args: &[String]) -> Result<(), String> {
+    if let Some(extra) = args.first() {
+        return Err(format!("`ci` takes no arguments, got `{extra}`"));
+    }
+    for (what, command, env) in STEPS {
+        eprintln!("==> {what}: {command}");
+        shell(command, env)?;
+    }
+    eprintln!("==> all CI steps passed");
+    Ok(())
+}
+
+pub(crate) fn bench(args: &[String]) -> Result<(), String> {
+    let only = crate::parse_only(args)?;
+    let passthrough: Vec<&str> = match args.iter().position(|a| a == "--") {
+        Some(i) => args[i + 1..].iter().map(String::as_str).collect(),
+        None => Vec::new(),
+    };
+    let mut cmd = Command::new("cargo");
+    cmd.current_dir(workspace_root())
+        .args(["bench", "--package", "dmd-benches"]);
+    for name in only.iter().flatten() {
+        cmd.args(["--bench", name]);
+    }
+    if !passthrough.is_empty() {
+        cmd.arg("--").args(passthrough);
+    }
+    status_ok(&mut cmd, "cargo bench")
+}
+
+/// Runs a whitespace-separated command line (no shell involved) from the workspace root.
+fn shell(command: &str, env: &[(&str, &str)]) -> Result<(), String> {
+    let mut words = command.split_whitespace();
+    let program = words.next().ok_or("empty command")?;
+    let mut cmd = Command::new(program);
+    cmd.current_dir(workspace_root()).args(words);
+    for (k, v) in env {
+        cmd.env(k, v);
+    }
+    status_ok(&mut cmd, command)
+}
+
+pub(crate) fn status_ok(cmd: &mut Command, what: &str) -> Result<(), String> {
+    let status = cmd
+        .status()
+        .map_err(|e| format!("could not start `{what}`: {e}"))?;
+    if status.success() {
+        Ok(())
+    } else {
+        Err(format!("`{what}` failed ({status})"))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn read(rel: &str) -> String {
+        std::fs::read_to_string(workspace_root().join(rel))
+            .unwrap_or_else(|e| panic!("cannot read {rel}: {e}"))
+    }
+
+    #[test]
+    fn ci_script_matches_steps() {
+        let script = read(".ci/run");
+        let lines: Vec<&str> = script.lines().map(str::trim).collect();
+        for (what, command, env) in STEPS {
+            let found = lines.iter().any(|l| {
+                l.ends_with(command) && env.iter().all(|(k, v)| l.contains(&format!("{k}=\"{v}\"")))
+            });
+            assert!(found, ".ci/run lacks the `{what}` step `{command}` (env {env:?})");
+        }
+    }
+
+    #[test]
+    fn readme_gives_the_test_command() {
+        let readme = read("README.md");
+        assert!(
+            readme.contains(&format!("\n{TEST_COMMAND}\n")),
+            "README.md must show `{TEST_COMMAND}` on a line of its own"
+        );
+    }
+}
