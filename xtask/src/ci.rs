@@ -97,7 +97,10 @@ mod tests {
             let found = lines.iter().any(|l| {
                 l.ends_with(command) && env.iter().all(|(k, v)| l.contains(&format!("{k}=\"{v}\"")))
             });
-            assert!(found, ".ci/run lacks the `{what}` step `{command}` (env {env:?})");
+            assert!(
+                found,
+                ".ci/run lacks the `{what}` step `{command}` (env {env:?})"
+            );
         }
     }
 

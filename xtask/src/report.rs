@@ -40,7 +40,9 @@ mod tests {
         let doc = "# Validation\n\nIntro.\n";
         let once = splice(doc, "queue", "Event queue", "first\n").unwrap();
         assert!(once.starts_with("# Validation\n\nIntro.\n\n## Event queue\n"));
-        assert!(once.contains("<!-- BEGIN generated:queue -->\nfirst\n<!-- END generated:queue -->"));
+        assert!(
+            once.contains("<!-- BEGIN generated:queue -->\nfirst\n<!-- END generated:queue -->")
+        );
 
         let with_tail = format!("{once}\nHand-written tail.\n");
         let twice = splice(&with_tail, "queue", "Event queue", "second").unwrap();

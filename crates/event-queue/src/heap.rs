@@ -83,10 +83,6 @@ impl<P> MinHeap<P> {
         self.v.drain(..)
     }
 
-    pub(crate) fn entries(&self) -> &[Entry<P>] {
-        &self.v
-    }
-
     fn heapify(&mut self) {
         let n = self.v.len();
         for i in (0..n / 2).rev() {
@@ -206,8 +202,8 @@ impl<P> EventQueue for HeapQueue<P> {
         self.heap.pop().map(Event::from)
     }
 
-    fn peek_time(&self) -> Option<f64> {
-        self.heap.peek().map(|e| e.time)
+    fn peek(&self) -> Option<(f64, &P)> {
+        self.heap.peek().map(|e| (e.time, &e.payload))
     }
 
     fn len(&self) -> usize {

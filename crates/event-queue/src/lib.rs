@@ -5,9 +5,12 @@
 //!
 //! - [`EventQueue`], the small trait such a queue implements;
 //! - [`HeapQueue`], a binary heap (O(log n), the baseline);
+//! - [`BoundedQueue`], G. Paul's bounded priority queue (O(1): buckets of width Δ over a time
+//!   window, a small heap for the bucket being consumed, an overflow list, automatic tuning);
 //! - lazy invalidation: a [`StampBook`] of per-participant generation counters and the
 //!   [`Ticket`] an event carries, so that events made obsolete by an earlier event are recognised
-//!   and dropped when popped instead of being searched for and cancelled.
+//!   and dropped when popped instead of being searched for and cancelled; [`LazyQueue`] puts a
+//!   queue and a book together the way an event loop uses them.
 //!
 //! Every queue pops in the same total order: by time, then first-in, first-out among equal
 //! times. NaN times are refused with [`QueueError::NanTime`]; `±∞` are accepted (`+∞` pops after
@@ -32,11 +35,15 @@
 //! # Ok::<(), event_queue::QueueError>(())
 //! ```
 
+mod bounded;
 mod heap;
+mod lazy;
 mod order;
 mod stamp;
 
+pub use bounded::{BoundedQueue, BoundedStats, DEFAULT_EVENTS_PER_BUCKET, Layout, Tuning};
 pub use heap::HeapQueue;
+pub use lazy::{Cleanup, LazyQueue, LazyStats};
 pub use stamp::{ParticipantId, Stamp, StampBook, Stamped, Ticket};
 
 use order::Entry;
@@ -77,8 +84,13 @@ pub trait EventQueue {
     /// Removes and returns the earliest event, stale or not.
     fn pop(&mut self) -> Option<Event<Self::Payload>>;
 
+    /// The earliest event, without removing it.
+    fn peek(&self) -> Option<(f64, &Self::Payload)>;
+
     /// The time of the earliest event.
-    fn peek_time(&self) -> Option<f64>;
+    fn peek_time(&self) -> Option<f64> {
+        self.peek().map(|(t, _)| t)
+    }
 
     /// Number of events held, stale ones included.
     fn len(&self) -> usize;
@@ -101,12 +113,15 @@ pub trait EventQueue {
 pub enum QueueError {
     /// An event time was NaN, which has no place in a time order.
     NanTime,
+    /// A queue was configured with parameters it cannot work with; the text says which.
+    InvalidLayout(&'static str),
 }
 
 impl std::fmt::Display for QueueError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             QueueError::NanTime => f.write_str("event time is NaN; it cannot be scheduled"),
+            QueueError::InvalidLayout(why) => write!(f, "invalid queue layout: {why}"),
         }
     }
 }

@@ -1,0 +1,519 @@
+//! G. Paul's bounded priority queue (J. Comput. Phys. 221, 615, 2007): O(1) per event.
+//!
+//! Time is cut into buckets of width Δ. A window of `n` buckets starting at `start` holds
+//! unsorted lists; only the bucket being consumed is fine-sorted, in a small binary heap (Paul's
+//! "binary tree"). Events beyond the window wait, unsorted, in an overflow list. When the window
+//! is used up, the next one starts at the earliest overflow event and the overflow is dealt out
+//! again (the wrap-around). A push is one multiply and one vector push; a pop is a pop from a
+//! heap of a few events; the bucket scan and the redistribution are paid once per window and
+//! amortise to O(1) per event when the window holds a fair share of the queue.
+//!
+//! **Tuning.** With [`Tuning::Auto`] (the default) Δ and `n` are chosen afresh at every
+//! wrap-around from the events then waiting, all of which sit in the overflow: Δ so that the
+//! earliest quarter of them falls about [`DEFAULT_EVENTS_PER_BUCKET`] to a bucket (Paul sizes Δ by
+//! the population of the tree), and `n` so that the window reaches roughly twice as far as those
+//! events (Paul sizes `n` by how far ahead of the last pop new events land). Both adapt as the
+//! simulation's event rate or queue size changes. [`Tuning::Fixed`] pins them, as in the paper.
+//!
+//! Events at `+∞` wait in a list of their own and pop, first in first out, once no finite event
+//! is left; events at `−∞`, or earlier than the bucket being consumed, go straight to the heap.
+//!
+//! **Order.** Which bucket an event goes to is a monotone function of its time, so the queue pops
+//! in exactly the same order as [`HeapQueue`](crate::HeapQueue), ties included.
+
+use crate::heap::MinHeap;
+use crate::order::Entry;
+use crate::{Event, EventQueue, QueueError, check_time};
+
+/// Events per bucket that [`Tuning::Auto`] aims for near the front of the queue.
+pub const DEFAULT_EVENTS_PER_BUCKET: f64 = 2.0;
+
+/// Fewest buckets an automatically tuned window has.
+const MIN_BUCKETS: usize = 16;
+/// Most buckets an automatically tuned window has (memory: 24 bytes per bucket, plus entries).
+const MAX_BUCKETS: usize = 1 << 26;
+/// Heap population that makes an automatically tuned queue re-spread its events at once instead
+/// of waiting for the next wrap-around (a first layout that is far off, or a burst of events).
+const MIN_HEAP_LIMIT: usize = 256;
+
+/// How the bucket width and count are chosen.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Tuning {
+    /// Re-chosen at every wrap-around from the waiting events, aiming for
+    /// `events_per_bucket` events per bucket near the front of the queue.
+    Auto {
+        /// Target bucket population (> 0); small values mean more, emptier buckets.
+        events_per_bucket: f64,
+    },
+    /// Fixed width and count, never changed.
+    Fixed(Layout),
+}
+
+impl Default for Tuning {
+    fn default() -> Self {
+        Tuning::Auto {
+            events_per_bucket: DEFAULT_EVENTS_PER_BUCKET,
+        }
+    }
+}
+
+/// Bucket width Δ and number of buckets in the window.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Layout {
+    /// Δ, the time span of one bucket (finite, > 0).
+    pub width: f64,
+    /// Number of buckets in the window (≥ 1).
+    pub buckets: usize,
+}
+
+/// Counters describing how the queue has been working, for tuning and reports.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct BoundedStats {
+    /// Wrap-arounds: windows used up and restarted from the overflow.
+    pub wraps: u64,
+    /// Re-spreads: the fine-sorted heap grew too large and every event was dealt out afresh.
+    pub respreads: u64,
+    /// Events moved out of the overflow list into a window.
+    pub overflow_moves: u64,
+    /// Buckets emptied into the fine-sorted heap.
+    pub buckets_consumed: u64,
+    /// Events those buckets held, in total.
+    pub bucket_events: u64,
+}
+
+/// G. Paul's O(1) priority queue of timed events; see the [module docs](self).
+///
+/// ```
+/// use event_queue::{BoundedQueue, EventQueue};
+///
+/// let mut q = BoundedQueue::new();
+/// for (i, t) in [0.3, 7.5, 0.1, 1e6, 2.0].into_iter().enumerate() {
+///     q.push(t, i)?;
+/// }
+/// let order: Vec<usize> = std::iter::from_fn(|| q.pop().map(|e| e.payload)).collect();
+/// assert_eq!(order, [2, 0, 4, 1, 3]);
+/// # Ok::<(), event_queue::QueueError>(())
+/// ```
+#[derive(Clone, Debug)]
+pub struct BoundedQueue<P> {
+    /// Start of bucket 0 of the current window (always finite).
+    start: f64,
+    width: f64,
+    inv_width: f64,
+    /// Unsorted lists of the window; bucket `k` spans `[start + kΔ, start + (k+1)Δ)`.
+    buckets: Vec<Vec<Entry<P>>>,
+    /// The bucket whose events are in `current`; events of buckets `≤ cur` go to `current`.
+    cur: usize,
+    /// Fine-sorted events of bucket `cur` and anything pushed earlier than it.
+    /// Invariant: empty only when no finite event is left.
+    current: MinHeap<P>,
+    /// Finite events at or beyond the end of the window, unsorted.
+    overflow: Vec<Entry<P>>,
+    /// Events at `+∞`, in arrival (= pop) order; they pop only when no finite event is left.
+    at_infinity: std::collections::VecDeque<Entry<P>>,
+    /// Reused allocation for redistributing the overflow.
+    spare: Vec<Entry<P>>,
+    /// Reused allocation for the time quantiles of auto-tuning.
+    scratch: Vec<f64>,
+    len: usize,
+    next_seq: u64,
+    tuning: Tuning,
+    /// With auto-tuning, a heap larger than this triggers [`BoundedQueue::respread`]. Reset to
+    /// twice the heap size after each re-spread or wrap, so that a pile of equal times that no
+    /// layout can spread costs O(1) amortised instead of a re-spread per push.
+    heap_limit: usize,
+    stats: BoundedStats,
+}
+
+impl<P> Default for BoundedQueue<P> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<P> BoundedQueue<P> {
+    /// An empty queue with automatic tuning.
+    pub fn new() -> Self {
+        let layout = Layout {
+            width: 1.0,
+            buckets: MIN_BUCKETS,
+        };
+        Self::build(layout, Tuning::default())
+    }
+
+    /// An empty queue with the given tuning.
+    ///
+    /// # Errors
+    /// [`QueueError::InvalidLayout`] for a non-finite or non-positive width, zero buckets, or a
+    /// target bucket population that is not finite and positive.
+    pub fn with_tuning(tuning: Tuning) -> Result<Self, QueueError> {
+        let layout = match tuning {
+            Tuning::Auto { events_per_bucket } => {
+                if !(events_per_bucket.is_finite() && events_per_bucket > 0.0) {
+                    return Err(QueueError::InvalidLayout(
+                        "events per bucket must be finite and positive",
+                    ));
+                }
+                Layout {
+                    width: 1.0,
+                    buckets: MIN_BUCKETS,
+                }
+            }
+            Tuning::Fixed(layout) => {
+                if !(layout.width.is_finite() && layout.width > 0.0) {
+                    return Err(QueueError::InvalidLayout(
+                        "bucket width must be finite and positive",
+                    ));
+                }
+                if layout.buckets == 0 {
+                    return Err(QueueError::InvalidLayout(
+                        "a window needs at least one bucket",
+                    ));
+                }
+                layout
+            }
+        };
+        Ok(Self::build(layout, tuning))
+    }
+
+    fn build(layout: Layout, tuning: Tuning) -> Self {
+        let mut buckets = Vec::new();
+        buckets.resize_with(layout.buckets, Vec::new);
+        Self {
+            start: 0.0,
+            width: layout.width,
+            inv_width: 1.0 / layout.width,
+            buckets,
+            cur: 0,
+            current: MinHeap::new(),
+            overflow: Vec::new(),
+            at_infinity: std::collections::VecDeque::new(),
+            spare: Vec::new(),
+            scratch: Vec::new(),
+            len: 0,
+            next_seq: 0,
+            tuning,
+            heap_limit: MIN_HEAP_LIMIT,
+            stats: BoundedStats::default(),
+        }
+    }
+
+    /// The bucket width and count in use now.
+    pub fn layout(&self) -> Layout {
+        Layout {
+            width: self.width,
+            buckets: self.buckets.len(),
+        }
+    }
+
+    /// How the queue has been working so far.
+    pub fn stats(&self) -> BoundedStats {
+        self.stats
+    }
+
+    /// Puts an entry where it belongs: the heap if its bucket has been reached, a bucket if it
+    /// falls in the window, the overflow otherwise. NaN-free times make `x` monotone in time.
+    #[inline(always)]
+    fn place(&mut self, e: Entry<P>) {
+        let x = (e.time - self.start) * self.inv_width;
+        if x < (self.cur + 1) as f64 {
+            self.current.push(e);
+        } else if x < self.buckets.len() as f64 {
+            self.buckets[x as usize].push(e);
+        } else {
+            self.overflow.push(e);
+        }
+    }
+
+    /// Whether finite events wait outside `current`.
+    #[inline(always)]
+    fn finite_waiting(&self) -> bool {
+        self.len > self.current.len() + self.at_infinity.len()
+    }
+
+    /// Refills `current` from the next non-empty bucket, wrapping around as often as needed.
+    /// Called only when `current` is empty and finite events wait elsewhere.
+    fn advance(&mut self) {
+        debug_assert!(self.current.is_empty() && self.finite_waiting());
+        loop {
+            while self.cur + 1 < self.buckets.len() {
+                self.cur += 1;
+                let bucket = &mut self.buckets[self.cur];
+                if !bucket.is_empty() {
+                    self.stats.buckets_consumed += 1;
+                    self.stats.bucket_events += bucket.len() as u64;
+                    self.current.extend(bucket);
+                    return;
+                }
+            }
+            self.wrap();
+            if !self.current.is_empty() {
+                return;
+            }
+        }
+    }
+
+    /// Deals every event out afresh with a new layout: the heap has grown too large, so the
+    /// layout no longer fits the events (auto-tuning only).
+    fn respread(&mut self) {
+        self.stats.respreads += 1;
+        self.overflow.extend(self.current.drain());
+        for b in &mut self.buckets[self.cur + 1..] {
+            self.overflow.append(b);
+        }
+        self.wrap();
+        if self.current.is_empty() && self.finite_waiting() {
+            self.advance();
+        }
+    }
+
+    /// Starts a new window at the earliest overflow event and deals the overflow out again.
+    fn wrap(&mut self) {
+        debug_assert!(self.current.is_empty());
+        debug_assert!(self.buckets.iter().all(Vec::is_empty));
+        self.stats.wraps += 1;
+        // −∞ (moved here by a re-spread) always lands in the heap; it cannot start a window.
+        let t_min = self
+            .overflow
+            .iter()
+            .map(|e| e.time)
+            .filter(|t| t.is_finite())
+            .fold(f64::INFINITY, f64::min);
+        if t_min.is_finite() {
+            if let Tuning::Auto { events_per_bucket } = self.tuning {
+                self.retune(t_min, events_per_bucket);
+            }
+            self.start = t_min;
+        }
+        self.cur = 0;
+        std::mem::swap(&mut self.overflow, &mut self.spare);
+        self.stats.overflow_moves += self.spare.len() as u64;
+        let mut waiting = std::mem::take(&mut self.spare);
+        for e in waiting.drain(..) {
+            self.place(e);
+        }
+        self.spare = waiting;
+        self.heap_limit = MIN_HEAP_LIMIT.max(2 * self.current.len());
+    }
+
+    /// Chooses Δ and `n` from the waiting events (all in the overflow), earliest at `t_min`.
+    fn retune(&mut self, t_min: f64, events_per_bucket: f64) {
+        let m = self.overflow.len();
+        self.scratch.clear();
+        self.scratch.extend(
+            self.overflow
+                .iter()
+                .map(|e| e.time)
+                .filter(|t| t.is_finite()),
+        );
+        let finite = self.scratch.len();
+        // The earliest quarter sets the density near the front of the queue.
+        let k = (finite / 4).max(1).min(finite - 1);
+        if k == 0 {
+            return; // a single finite event: nothing to measure, keep the layout
+        }
+        let (_, t_k, _) = self.scratch.select_nth_unstable_by(k, f64::total_cmp);
+        let span = *t_k - t_min;
+        let width = events_per_bucket * span / k as f64;
+        // Δ below the resolution of the times themselves cannot separate events.
+        let resolution = t_min.abs().max(t_k.abs()) * 4.0 * f64::EPSILON;
+        if !(width.is_finite() && width > resolution) {
+            return; // a pile of (nearly) equal times: keep the layout that holds them
+        }
+        let want = (2.0 * m as f64 / events_per_bucket).ceil() as usize;
+        let n = want.clamp(MIN_BUCKETS, MAX_BUCKETS).next_power_of_two();
+        self.width = width;
+        self.inv_width = 1.0 / width;
+        if n != self.buckets.len() {
+            self.buckets.resize_with(n, Vec::new);
+        }
+    }
+}
+
+impl<P> EventQueue for BoundedQueue<P> {
+    type Payload = P;
+
+    #[inline]
+    fn push(&mut self, time: f64, payload: P) -> Result<(), QueueError> {
+        check_time(time)?;
+        let seq = self.next_seq;
+        self.next_seq += 1;
+        self.len += 1;
+        if time == f64::INFINITY {
+            self.at_infinity.push_back(Entry { time, seq, payload });
+            return Ok(());
+        }
+        self.place(Entry { time, seq, payload });
+        if self.current.is_empty() {
+            self.advance();
+        } else if self.current.len() > self.heap_limit && matches!(self.tuning, Tuning::Auto { .. })
+        {
+            self.respread();
+        }
+        Ok(())
+    }
+
+    #[inline]
+    fn pop(&mut self) -> Option<Event<P>> {
+        let Some(e) = self.current.pop() else {
+            let e = self.at_infinity.pop_front()?;
+            self.len -= 1;
+            return Some(e.into());
+        };
+        self.len -= 1;
+        if self.current.is_empty() && self.finite_waiting() {
+            self.advance();
+        }
+        Some(e.into())
+    }
+
+    fn peek(&self) -> Option<(f64, &P)> {
+        self.current
+            .peek()
+            .or_else(|| self.at_infinity.front())
+            .map(|e| (e.time, &e.payload))
+    }
+
+    fn len(&self) -> usize {
+        self.len
+    }
+
+    fn clear(&mut self) {
+        self.current.clear();
+        for b in &mut self.buckets {
+            b.clear();
+        }
+        self.overflow.clear();
+        self.at_infinity.clear();
+        self.len = 0;
+    }
+
+    fn retain(&mut self, keep: &mut dyn FnMut(&P) -> bool) -> usize {
+        let mut removed = self.current.retain(keep);
+        for b in &mut self.buckets[self.cur + 1..] {
+            let before = b.len();
+            b.retain(|e| keep(&e.payload));
+            removed += before - b.len();
+        }
+        let before = self.overflow.len();
+        self.overflow.retain(|e| keep(&e.payload));
+        removed += before - self.overflow.len();
+        let before = self.at_infinity.len();
+        self.at_infinity.retain(|e| keep(&e.payload));
+        removed += before - self.at_infinity.len();
+        self.len -= removed;
+        if self.current.is_empty() && self.finite_waiting() {
+            self.advance();
+        }
+        removed
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn drain<P>(q: &mut BoundedQueue<P>) -> Vec<(f64, P)> {
+        std::iter::from_fn(|| q.pop().map(|e| (e.time, e.payload))).collect()
+    }
+
+    #[test]
+    fn wraps_around_and_keeps_order() {
+        let mut q = BoundedQueue::with_tuning(Tuning::Fixed(Layout {
+            width: 1.0,
+            buckets: 4,
+        }))
+        .unwrap();
+        for (i, t) in [9.5, 0.5, 3.5, 4.0, 100.0, 2.0, 2.0]
+            .into_iter()
+            .enumerate()
+        {
+            q.push(t, i).unwrap();
+        }
+        let got: Vec<usize> = drain(&mut q).into_iter().map(|(_, p)| p).collect();
+        assert_eq!(got, [1, 5, 6, 2, 3, 0, 4]);
+        assert!(q.stats().wraps >= 2, "{:?}", q.stats());
+    }
+
+    #[test]
+    fn refuses_bad_layouts() {
+        let bad = |width, buckets| {
+            BoundedQueue::<()>::with_tuning(Tuning::Fixed(Layout { width, buckets })).is_err()
+        };
+        assert!(bad(0.0, 8) && bad(-1.0, 8) && bad(f64::NAN, 8) && bad(f64::INFINITY, 8));
+        assert!(bad(1.0, 0));
+        for e in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+            let t = Tuning::Auto {
+                events_per_bucket: e,
+            };
+            assert!(BoundedQueue::<()>::with_tuning(t).is_err());
+        }
+    }
+
+    #[test]
+    fn auto_tuning_follows_the_time_scale() {
+        for scale in [1e-9, 1.0, 1e9] {
+            let mut q = BoundedQueue::new();
+            for i in 0..10_000u32 {
+                q.push(f64::from(i) * scale, i).unwrap();
+            }
+            // Draining forces wrap-arounds that measure the density: ~2 events per bucket.
+            let mut last = f64::NEG_INFINITY;
+            for _ in 0..5_000 {
+                let e = q.pop().unwrap();
+                assert!(e.time >= last);
+                last = e.time;
+            }
+            let w = q.layout().width / scale;
+            assert!(
+                (1.0..=4.0).contains(&w),
+                "width/scale = {w} at scale {scale}"
+            );
+        }
+    }
+
+    #[test]
+    fn respread_with_minus_infinity_and_earlier_times_in_the_heap() {
+        let mut q = BoundedQueue::new();
+        q.push(f64::NEG_INFINITY, u32::MAX).unwrap();
+        q.push(f64::INFINITY, u32::MAX - 1).unwrap();
+        // Far more events than the first layout's heap limit, all in its first bucket.
+        for i in 0..5_000u32 {
+            q.push(1e-6 * f64::from(i % 1000), i).unwrap();
+        }
+        assert!(q.stats().respreads > 0);
+        let got = drain(&mut q);
+        assert_eq!(got.len(), 5_002);
+        assert_eq!(got[0], (f64::NEG_INFINITY, u32::MAX));
+        assert_eq!(got[5_001], (f64::INFINITY, u32::MAX - 1));
+        assert!(got.windows(2).all(|w| w[0].0 <= w[1].0));
+        // Equal times keep their arrival order.
+        assert!(
+            got.windows(2)
+                .filter(|w| w[0].0 == w[1].0 && w[0].0.is_finite())
+                .all(|w| w[0].1 < w[1].1)
+        );
+    }
+
+    #[test]
+    fn retain_across_heap_buckets_and_overflow() {
+        let mut q = BoundedQueue::with_tuning(Tuning::Fixed(Layout {
+            width: 1.0,
+            buckets: 8,
+        }))
+        .unwrap();
+        for i in 0..100u32 {
+            q.push(f64::from(i) * 0.25, i).unwrap();
+        }
+        assert_eq!(q.retain(&mut |p| p % 2 == 0), 50);
+        assert_eq!(q.len(), 50);
+        let got: Vec<u32> = drain(&mut q).into_iter().map(|(_, p)| p).collect();
+        assert_eq!(got, (0..100).step_by(2).collect::<Vec<_>>());
+        // Removing everything in the heap must move on to the next bucket.
+        for i in 0..20u32 {
+            q.push(f64::from(i), i).unwrap();
+        }
+        q.retain(&mut |p| *p >= 5);
+        assert_eq!(q.peek_time(), Some(5.0));
+    }
+}
