@@ -123,10 +123,8 @@ fn run<Q: EventQueue<Payload = u32>>(q: &mut Q, ops: &[Op], origin: f64) -> Vec<
             }
             Op::Pop => {
                 let e = q.pop();
-                if let Some(e) = &e {
-                    if e.time.is_finite() {
-                        last = e.time;
-                    }
+                if let Some(e) = e.as_ref().filter(|e| e.time.is_finite()) {
+                    last = e.time;
                 }
                 log.push(format!("pop {:?}", e.map(|e| (e.time, e.payload))));
             }
