@@ -11,7 +11,7 @@
 //! **Tuning.** With [`Tuning::Auto`] (the default) Δ and `n` are chosen afresh at every
 //! wrap-around from the events then waiting, all of which sit in the overflow: Δ so that the
 //! earliest quarter of them falls about [`DEFAULT_EVENTS_PER_BUCKET`] to a bucket (Paul sizes Δ by
-//! the population of the tree), and `n` so that the window reaches roughly twice as far as those
+//! the population of the tree), and `n` so that the window reaches several times as far as those
 //! events (Paul sizes `n` by how far ahead of the last pop new events land). Both adapt as the
 //! simulation's event rate or queue size changes. [`Tuning::Fixed`] pins them, as in the paper.
 //!
@@ -31,10 +31,19 @@ pub const DEFAULT_EVENTS_PER_BUCKET: f64 = 2.0;
 /// Fewest buckets an automatically tuned window has.
 const MIN_BUCKETS: usize = 16;
 /// Most buckets an automatically tuned window has (memory: 24 bytes per bucket, plus entries).
-const MAX_BUCKETS: usize = 1 << 26;
-/// Heap population that makes an automatically tuned queue re-spread its events at once instead
-/// of waiting for the next wrap-around (a first layout that is far off, or a burst of events).
-const MIN_HEAP_LIMIT: usize = 256;
+const MAX_BUCKETS: usize = 1 << 28;
+/// Most fine buckets in one block: a block's lists and entries must stay in a core's L2 cache.
+const MAX_FINE: usize = 1 << 12;
+/// Waiting times sampled to choose Δ at a wrap-around.
+const TUNING_SAMPLE: usize = 4096;
+/// How far an automatically tuned window reaches, in units of the span the waiting events
+/// would fill at the density of the front of the queue.
+const WINDOW_REACH: f64 = 8.0;
+/// A heap this many times the target bucket population (and at least [`MIN_HEAP_LIMIT`])
+/// tells an automatically tuned queue that its layout is far off: it re-spreads at once rather
+/// than waiting for the next wrap-around, which a long window may put millions of events away.
+const HEAP_LIMIT_FACTOR: f64 = 8.0;
+const MIN_HEAP_LIMIT: usize = 16;
 
 /// How the bucket width and count are chosen.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -62,7 +71,7 @@ impl Default for Tuning {
 pub struct Layout {
     /// Δ, the time span of one bucket (finite, > 0).
     pub width: f64,
-    /// Number of buckets in the window (≥ 1).
+    /// Number of buckets in the window (≥ 1; rounded up to a power of two).
     pub buckets: usize,
 }
 
@@ -75,6 +84,8 @@ pub struct BoundedStats {
     pub respreads: u64,
     /// Events moved out of the overflow list into a window.
     pub overflow_moves: u64,
+    /// Events dealt from a block's list into its fine buckets.
+    pub block_moves: u64,
     /// Buckets emptied into the fine-sorted heap.
     pub buckets_consumed: u64,
     /// Events those buckets held, in total.
@@ -96,14 +107,28 @@ pub struct BoundedStats {
 /// ```
 #[derive(Clone, Debug)]
 pub struct BoundedQueue<P> {
+    /// Sequence number of the next push. Kept away from `len`: adjacent, the two are updated
+    /// by one 16-byte load and store in `push` that cannot take its value from `pop`'s 8-byte
+    /// store to `len` (a store-forwarding stall that cost ~40 % of a push at 10⁶ events).
+    next_seq: u64,
     /// Start of bucket 0 of the current window (always finite).
     start: f64,
     width: f64,
     inv_width: f64,
-    /// Unsorted lists of the window; bucket `k` spans `[start + kΔ, start + (k+1)Δ)`.
-    buckets: Vec<Vec<Entry<P>>>,
-    /// The bucket whose events are in `current`; events of buckets `≤ cur` go to `current`.
-    cur: usize,
+    /// Buckets per block are `1 << shift`.
+    shift: u32,
+    /// Buckets in the window, as a float for the comparison in [`place`](Self::place).
+    window: f64,
+    /// The unsorted lists of the block being consumed; window bucket `i` of that block is
+    /// `fine[i & mask]` and spans `[start + iΔ, start + (i+1)Δ)`.
+    fine: Vec<Vec<Entry<P>>>,
+    /// One unsorted list per block; block `b` holds window buckets `b << shift ..` until it is
+    /// dealt into `fine`. `coarse[0]` is never used: block 0 starts out dealt. Never shrinks, so
+    /// the lists keep their capacity when a retune changes the number of blocks: allocating
+    /// them afresh costs a page fault per 4 KiB, which at 10⁶ events doubled the time per event.
+    coarse: Vec<Vec<Entry<P>>>,
+    /// The window bucket whose events are in `current`; buckets `≤ cur` go to `current`.
+    cur: u64,
     /// Fine-sorted events of bucket `cur` and anything pushed earlier than it.
     /// Invariant: empty only when no finite event is left.
     current: MinHeap<P>,
@@ -111,17 +136,19 @@ pub struct BoundedQueue<P> {
     overflow: Vec<Entry<P>>,
     /// Events at `+∞`, in arrival (= pop) order; they pop only when no finite event is left.
     at_infinity: std::collections::VecDeque<Entry<P>>,
-    /// Reused allocation for redistributing the overflow.
+    /// Reused allocation for dealing a list out again.
     spare: Vec<Entry<P>>,
     /// Reused allocation for the time quantiles of auto-tuning.
     scratch: Vec<f64>,
     len: usize,
-    next_seq: u64,
     tuning: Tuning,
-    /// With auto-tuning, a heap larger than this triggers [`BoundedQueue::respread`]. Reset to
+    /// With auto-tuning, a heap larger than this triggers [`BoundedQueue::respread`]. Raised to
     /// twice the heap size after each re-spread or wrap, so that a pile of equal times that no
-    /// layout can spread costs O(1) amortised instead of a re-spread per push.
+    /// layout can spread does not trigger one re-spread after another.
     heap_limit: usize,
+    /// Pushes and pops since the last re-spread. A re-spread (O(len)) waits until this reaches
+    /// `len / 2`, which bounds its amortised cost by O(1) per operation whatever the times.
+    ops_since_respread: usize,
     stats: BoundedStats,
 }
 
@@ -144,8 +171,8 @@ impl<P> BoundedQueue<P> {
     /// An empty queue with the given tuning.
     ///
     /// # Errors
-    /// [`QueueError::InvalidLayout`] for a non-finite or non-positive width, zero buckets, or a
-    /// target bucket population that is not finite and positive.
+    /// [`QueueError::InvalidLayout`] for a non-finite or non-positive width, zero or more than
+    /// 2²⁸ buckets, or a target bucket population that is not finite and positive.
     pub fn with_tuning(tuning: Tuning) -> Result<Self, QueueError> {
         let layout = match tuning {
             Tuning::Auto { events_per_bucket } => {
@@ -165,9 +192,9 @@ impl<P> BoundedQueue<P> {
                         "bucket width must be finite and positive",
                     ));
                 }
-                if layout.buckets == 0 {
+                if layout.buckets == 0 || layout.buckets > MAX_BUCKETS {
                     return Err(QueueError::InvalidLayout(
-                        "a window needs at least one bucket",
+                        "a window needs between 1 and 2^28 buckets",
                     ));
                 }
                 layout
@@ -177,13 +204,14 @@ impl<P> BoundedQueue<P> {
     }
 
     fn build(layout: Layout, tuning: Tuning) -> Self {
-        let mut buckets = Vec::new();
-        buckets.resize_with(layout.buckets, Vec::new);
-        Self {
+        let mut q = Self {
             start: 0.0,
-            width: layout.width,
-            inv_width: 1.0 / layout.width,
-            buckets,
+            width: 1.0,
+            inv_width: 1.0,
+            shift: 0,
+            window: 1.0,
+            fine: Vec::new(),
+            coarse: Vec::new(),
             cur: 0,
             current: MinHeap::new(),
             overflow: Vec::new(),
@@ -194,7 +222,27 @@ impl<P> BoundedQueue<P> {
             next_seq: 0,
             tuning,
             heap_limit: MIN_HEAP_LIMIT,
+            ops_since_respread: 0,
             stats: BoundedStats::default(),
+        };
+        q.set_layout(layout.width, layout.buckets);
+        q.heap_limit = q.heap_limit_floor();
+        q
+    }
+
+    /// Sets Δ and the bucket count (rounded up to a power of two) and splits the window into
+    /// blocks of at most [`MAX_FINE`] buckets. Only while every list is empty.
+    fn set_layout(&mut self, width: f64, buckets: usize) {
+        let total = buckets.next_power_of_two();
+        let fine = total.min(MAX_FINE);
+        self.width = width;
+        self.inv_width = 1.0 / width;
+        self.shift = fine.trailing_zeros();
+        self.window = total as f64;
+        self.fine.resize_with(fine, Vec::new);
+        let blocks = total / fine;
+        if self.coarse.len() < blocks {
+            self.coarse.resize_with(blocks, Vec::new);
         }
     }
 
@@ -202,7 +250,7 @@ impl<P> BoundedQueue<P> {
     pub fn layout(&self) -> Layout {
         Layout {
             width: self.width,
-            buckets: self.buckets.len(),
+            buckets: self.window as usize,
         }
     }
 
@@ -211,15 +259,30 @@ impl<P> BoundedQueue<P> {
         self.stats
     }
 
-    /// Puts an entry where it belongs: the heap if its bucket has been reached, a bucket if it
-    /// falls in the window, the overflow otherwise. NaN-free times make `x` monotone in time.
+    /// Window bucket of a time, as a float: monotone in time for NaN-free times, so every
+    /// decision taken from it keeps the events in order.
+    #[inline(always)]
+    fn index(&self, time: f64) -> f64 {
+        (time - self.start) * self.inv_width
+    }
+
+    /// Puts an entry where it belongs: the heap if its bucket has been reached, a fine bucket if
+    /// it falls in the block being consumed, its block's list if further in the window, the
+    /// overflow otherwise.
     #[inline(always)]
     fn place(&mut self, e: Entry<P>) {
-        let x = (e.time - self.start) * self.inv_width;
+        let x = self.index(e.time);
         if x < (self.cur + 1) as f64 {
             self.current.push(e);
-        } else if x < self.buckets.len() as f64 {
-            self.buckets[x as usize].push(e);
+        } else if x < self.window {
+            let i = x as u64;
+            let block = i >> self.shift;
+            if block == self.cur >> self.shift {
+                let mask = self.fine.len() as u64 - 1;
+                self.fine[(i & mask) as usize].push(e);
+            } else {
+                self.coarse[block as usize].push(e);
+            }
         } else {
             self.overflow.push(e);
         }
@@ -231,46 +294,52 @@ impl<P> BoundedQueue<P> {
         self.len > self.current.len() + self.at_infinity.len()
     }
 
-    /// Refills `current` from the next non-empty bucket, wrapping around as often as needed.
-    /// Called only when `current` is empty and finite events wait elsewhere.
+    /// Refills `current` from the next non-empty bucket, dealing out the next block's list and
+    /// wrapping around as needed. Called only when `current` is empty and finite events wait
+    /// elsewhere.
     fn advance(&mut self) {
         debug_assert!(self.current.is_empty() && self.finite_waiting());
+        let mask = self.fine.len() as u64 - 1;
         loop {
-            while self.cur + 1 < self.buckets.len() {
-                self.cur += 1;
-                let bucket = &mut self.buckets[self.cur];
-                if !bucket.is_empty() {
-                    self.stats.buckets_consumed += 1;
-                    self.stats.bucket_events += bucket.len() as u64;
-                    self.current.extend(bucket);
+            let next = self.cur + 1;
+            if next as f64 >= self.window {
+                self.wrap();
+                if !self.current.is_empty() {
                     return;
                 }
+                continue;
             }
-            self.wrap();
-            if !self.current.is_empty() {
+            if next & mask == 0 {
+                self.deal_block((next >> self.shift) as usize);
+            }
+            self.cur = next;
+            let bucket = &mut self.fine[(next & mask) as usize];
+            if !bucket.is_empty() {
+                self.stats.buckets_consumed += 1;
+                self.stats.bucket_events += bucket.len() as u64;
+                self.current.extend(bucket);
                 return;
             }
         }
     }
 
-    /// Deals every event out afresh with a new layout: the heap has grown too large, so the
-    /// layout no longer fits the events (auto-tuning only).
-    fn respread(&mut self) {
-        self.stats.respreads += 1;
-        self.overflow.extend(self.current.drain());
-        for b in &mut self.buckets[self.cur + 1..] {
-            self.overflow.append(b);
+    /// Deals block `b`'s list into the fine buckets (all of which are empty).
+    fn deal_block(&mut self, b: usize) {
+        let mut list = std::mem::replace(&mut self.coarse[b], std::mem::take(&mut self.spare));
+        self.stats.block_moves += list.len() as u64;
+        let mask = self.fine.len() as u64 - 1;
+        for e in list.drain(..) {
+            let i = self.index(e.time) as u64;
+            debug_assert_eq!(i >> self.shift, b as u64);
+            self.fine[(i & mask) as usize].push(e);
         }
-        self.wrap();
-        if self.current.is_empty() && self.finite_waiting() {
-            self.advance();
-        }
+        self.spare = list;
     }
 
     /// Starts a new window at the earliest overflow event and deals the overflow out again.
     fn wrap(&mut self) {
         debug_assert!(self.current.is_empty());
-        debug_assert!(self.buckets.iter().all(Vec::is_empty));
+        debug_assert!(self.fine.iter().chain(&self.coarse).all(Vec::is_empty));
         self.stats.wraps += 1;
         // −∞ (moved here by a re-spread) always lands in the heap; it cannot start a window.
         let t_min = self
@@ -286,47 +355,91 @@ impl<P> BoundedQueue<P> {
             self.start = t_min;
         }
         self.cur = 0;
-        std::mem::swap(&mut self.overflow, &mut self.spare);
-        self.stats.overflow_moves += self.spare.len() as u64;
-        let mut waiting = std::mem::take(&mut self.spare);
+        let mut waiting = std::mem::replace(&mut self.overflow, std::mem::take(&mut self.spare));
+        self.stats.overflow_moves += waiting.len() as u64;
         for e in waiting.drain(..) {
             self.place(e);
         }
+        // Give the overflow back its large allocation (it fills up again in this window).
+        if waiting.capacity() > self.overflow.capacity() {
+            waiting.append(&mut self.overflow);
+            std::mem::swap(&mut waiting, &mut self.overflow);
+        }
         self.spare = waiting;
-        self.heap_limit = MIN_HEAP_LIMIT.max(2 * self.current.len());
+        self.heap_limit = self.heap_limit_floor().max(2 * self.current.len());
     }
 
-    /// Chooses Δ and `n` from the waiting events (all in the overflow), earliest at `t_min`.
+    fn heap_limit_floor(&self) -> usize {
+        match self.tuning {
+            Tuning::Auto { events_per_bucket } => {
+                MIN_HEAP_LIMIT.max((HEAP_LIMIT_FACTOR * events_per_bucket) as usize)
+            }
+            Tuning::Fixed(_) => usize::MAX,
+        }
+    }
+
+    /// Re-spreads if the heap shows the layout is far off and enough operations have passed
+    /// since the last re-spread to pay for this one.
+    #[inline(always)]
+    fn check_layout(&mut self) {
+        self.ops_since_respread += 1;
+        if self.current.len() > self.heap_limit && 2 * self.ops_since_respread >= self.len {
+            self.respread();
+        }
+    }
+
+    /// Deals every event out afresh with a new layout: the heap has grown too large, so the
+    /// layout no longer fits the events (auto-tuning only).
+    #[cold]
+    fn respread(&mut self) {
+        self.stats.respreads += 1;
+        self.ops_since_respread = 0;
+        self.overflow.extend(self.current.drain());
+        for list in self.fine.iter_mut().chain(&mut self.coarse) {
+            self.overflow.append(list);
+        }
+        self.wrap();
+        if self.current.is_empty() && self.finite_waiting() {
+            self.advance();
+        }
+    }
+
+    /// Chooses Δ and the bucket count from the waiting events (all in the overflow), earliest
+    /// at `t_min`.
     fn retune(&mut self, t_min: f64, events_per_bucket: f64) {
         let m = self.overflow.len();
+        // A strided sample of the waiting times: the quantile below needs a few thousand
+        // values, not all of them, which keeps a wrap at O(1) work beyond moving the events.
+        let stride = (m / TUNING_SAMPLE).max(1);
         self.scratch.clear();
         self.scratch.extend(
             self.overflow
                 .iter()
+                .step_by(stride)
                 .map(|e| e.time)
                 .filter(|t| t.is_finite()),
         );
-        let finite = self.scratch.len();
+        let sample = self.scratch.len();
         // The earliest quarter sets the density near the front of the queue.
-        let k = (finite / 4).max(1).min(finite - 1);
+        let k = (sample / 4).max(1).min(sample.saturating_sub(1));
         if k == 0 {
             return; // a single finite event: nothing to measure, keep the layout
         }
         let (_, t_k, _) = self.scratch.select_nth_unstable_by(k, f64::total_cmp);
         let span = *t_k - t_min;
-        let width = events_per_bucket * span / k as f64;
+        // k sampled events stand for k·stride waiting ones.
+        let width = events_per_bucket * span / (k * stride) as f64;
         // Δ below the resolution of the times themselves cannot separate events.
         let resolution = t_min.abs().max(t_k.abs()) * 4.0 * f64::EPSILON;
         if !(width.is_finite() && width > resolution) {
             return; // a pile of (nearly) equal times: keep the layout that holds them
         }
-        let want = (2.0 * m as f64 / events_per_bucket).ceil() as usize;
-        let n = want.clamp(MIN_BUCKETS, MAX_BUCKETS).next_power_of_two();
-        self.width = width;
-        self.inv_width = 1.0 / width;
-        if n != self.buckets.len() {
-            self.buckets.resize_with(n, Vec::new);
-        }
+        // The window reaches WINDOW_REACH times as far as the events now waiting would fill
+        // at the front's density. Only one block of it is materialised as fine buckets, so a
+        // long reach costs just one list per block, and it makes wrap-arounds (which move
+        // every waiting event) rare.
+        let want = (WINDOW_REACH * m as f64 / events_per_bucket).ceil() as usize;
+        self.set_layout(width, want.clamp(MIN_BUCKETS, MAX_BUCKETS));
     }
 }
 
@@ -346,10 +459,8 @@ impl<P> EventQueue for BoundedQueue<P> {
         self.place(Entry { time, seq, payload });
         if self.current.is_empty() {
             self.advance();
-        } else if self.current.len() > self.heap_limit && matches!(self.tuning, Tuning::Auto { .. })
-        {
-            self.respread();
         }
+        self.check_layout();
         Ok(())
     }
 
@@ -364,6 +475,7 @@ impl<P> EventQueue for BoundedQueue<P> {
         if self.current.is_empty() && self.finite_waiting() {
             self.advance();
         }
+        self.check_layout();
         Some(e.into())
     }
 
@@ -380,8 +492,8 @@ impl<P> EventQueue for BoundedQueue<P> {
 
     fn clear(&mut self) {
         self.current.clear();
-        for b in &mut self.buckets {
-            b.clear();
+        for list in self.fine.iter_mut().chain(&mut self.coarse) {
+            list.clear();
         }
         self.overflow.clear();
         self.at_infinity.clear();
@@ -390,14 +502,12 @@ impl<P> EventQueue for BoundedQueue<P> {
 
     fn retain(&mut self, keep: &mut dyn FnMut(&P) -> bool) -> usize {
         let mut removed = self.current.retain(keep);
-        for b in &mut self.buckets[self.cur + 1..] {
-            let before = b.len();
-            b.retain(|e| keep(&e.payload));
-            removed += before - b.len();
+        let lists = self.fine.iter_mut().chain(&mut self.coarse);
+        for list in lists.chain(std::iter::once(&mut self.overflow)) {
+            let before = list.len();
+            list.retain(|e| keep(&e.payload));
+            removed += before - list.len();
         }
-        let before = self.overflow.len();
-        self.overflow.retain(|e| keep(&e.payload));
-        removed += before - self.overflow.len();
         let before = self.at_infinity.len();
         self.at_infinity.retain(|e| keep(&e.payload));
         removed += before - self.at_infinity.len();
@@ -436,12 +546,62 @@ mod tests {
     }
 
     #[test]
+    fn layout_catches_up_with_a_queue_that_grew() {
+        // Filling a queue from empty (no pops) tunes the layout for a fraction of the final
+        // size at best; the first pops must notice crowded buckets and re-spread, instead of
+        // running until the next wrap-around with dozens of events per bucket.
+        let mut q = BoundedQueue::new();
+        let mut x = 0x2545_f491_4f6c_dd1du64;
+        let n = 200_000u32;
+        for i in 0..n {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let u = ((x >> 11) + 1) as f64 / (1u64 << 53) as f64;
+            q.push(-u.ln(), i).unwrap();
+        }
+        let before = q.stats();
+        for _ in 0..20_000 {
+            q.pop().unwrap();
+        }
+        let s = q.stats();
+        let per_bucket = (s.bucket_events - before.bucket_events) as f64
+            / (s.buckets_consumed - before.buckets_consumed) as f64;
+        assert!(
+            per_bucket < 2.0 * DEFAULT_EVENTS_PER_BUCKET,
+            "{per_bucket} per bucket, {s:?}"
+        );
+    }
+
+    #[test]
+    fn blocks_are_dealt_in_order() {
+        // 2^14 buckets of width 1: four blocks of 4096; times spread over all of them.
+        let mut q = BoundedQueue::with_tuning(Tuning::Fixed(Layout {
+            width: 1.0,
+            buckets: 1 << 14,
+        }))
+        .unwrap();
+        let n = 50_000u64;
+        for i in 0..n {
+            // A permutation of 0..n scaled into [0, 16384): every block gets events.
+            let k = (i * 7_919) % n;
+            q.push(k as f64 * 16_384.0 / n as f64, k).unwrap();
+        }
+        let got = drain(&mut q);
+        assert_eq!(got.len(), n as usize);
+        assert!(got.iter().enumerate().all(|(i, &(_, k))| k == i as u64));
+        let s = q.stats();
+        assert!(s.block_moves > 3 * n / 4 - 100, "{s:?}");
+        assert_eq!(q.layout().buckets, 1 << 14);
+    }
+
+    #[test]
     fn refuses_bad_layouts() {
         let bad = |width, buckets| {
             BoundedQueue::<()>::with_tuning(Tuning::Fixed(Layout { width, buckets })).is_err()
         };
         assert!(bad(0.0, 8) && bad(-1.0, 8) && bad(f64::NAN, 8) && bad(f64::INFINITY, 8));
-        assert!(bad(1.0, 0));
+        assert!(bad(1.0, 0) && bad(1.0, (1 << 28) + 1));
         for e in [0.0, -1.0, f64::NAN, f64::INFINITY] {
             let t = Tuning::Auto {
                 events_per_bucket: e,

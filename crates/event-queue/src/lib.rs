@@ -10,7 +10,8 @@
 //! - lazy invalidation: a [`StampBook`] of per-participant generation counters and the
 //!   [`Ticket`] an event carries, so that events made obsolete by an earlier event are recognised
 //!   and dropped when popped instead of being searched for and cancelled; [`LazyQueue`] puts a
-//!   queue and a book together the way an event loop uses them.
+//!   queue and a book together the way an event loop uses them;
+//! - [`hold`], the classic hold model that benchmarks a queue (and a `std` heap adapter).
 //!
 //! Every queue pops in the same total order: by time, then first-in, first-out among equal
 //! times. NaN times are refused with [`QueueError::NanTime`]; `±∞` are accepted (`+∞` pops after
@@ -37,6 +38,7 @@
 
 mod bounded;
 mod heap;
+pub mod hold;
 mod lazy;
 mod order;
 mod stamp;

@@ -151,6 +151,15 @@ fn tiny_window() -> BoundedQueue<u32> {
     .unwrap()
 }
 
+/// 2^14 buckets of width 0.01: four blocks, so block lists are dealt and the window wraps.
+fn blocked_window() -> BoundedQueue<u32> {
+    BoundedQueue::with_tuning(Tuning::Fixed(Layout {
+        width: 0.01,
+        buckets: 1 << 14,
+    }))
+    .unwrap()
+}
+
 fn sparse_auto() -> BoundedQueue<u32> {
     BoundedQueue::with_tuning(Tuning::Auto {
         events_per_bucket: 0.25,
@@ -170,6 +179,7 @@ proptest! {
         prop_assert_eq!(&run(&mut BoundedQueue::new(), &ops, origin), &expected, "bounded auto");
         prop_assert_eq!(&run(&mut sparse_auto(), &ops, origin), &expected, "bounded sparse");
         prop_assert_eq!(&run(&mut tiny_window(), &ops, origin), &expected, "bounded tiny window");
+        prop_assert_eq!(&run(&mut blocked_window(), &ops, origin), &expected, "bounded blocks");
     }
 
     #[test]
@@ -184,6 +194,9 @@ proptest! {
         let mut q = BoundedQueue::new();
         prop_assert_eq!(&run(&mut q, &ops, 0.0), &expected);
         prop_assert!(q.stats().wraps + q.stats().respreads > 0);
+        // A sparse target spreads the same events over many blocks of fine buckets.
+        let mut q = BoundedQueue::with_tuning(Tuning::Auto { events_per_bucket: 0.1 }).unwrap();
+        prop_assert_eq!(&run(&mut q, &ops, 0.0), &expected);
     }
 }
 
@@ -326,6 +339,8 @@ proptest! {
             prop_assert_eq!(&run_lazy(BoundedQueue::new(), &ops, cleanup), &expected);
             let tiny = BoundedQueue::with_tuning(Tuning::Fixed(Layout { width: 0.3, buckets: 2 })).unwrap();
             prop_assert_eq!(&run_lazy(tiny, &ops, cleanup), &expected);
+            let blocks = BoundedQueue::with_tuning(Tuning::Fixed(Layout { width: 1e-3, buckets: 1 << 14 })).unwrap();
+            prop_assert_eq!(&run_lazy(blocks, &ops, cleanup), &expected);
         }
     }
 }
