@@ -10,8 +10,15 @@ use crate::workspace_root;
 /// The test command the README gives a newcomer. `.ci/run` must run exactly this.
 pub(crate) const TEST_COMMAND: &str = "cargo test --workspace";
 
-/// Every CI step as (description, program and arguments, extra environment).
-pub(crate) const STEPS: &[(&str, &str, &[(&str, &str)])] = &[
+/// One CI step: what it checks, the command line, and extra environment variables.
+pub(crate) type Step = (
+    &'static str,
+    &'static str,
+    &'static [(&'static str, &'static str)],
+);
+
+/// Every CI step, in order.
+pub(crate) const STEPS: &[Step] = &[
     ("format", "cargo fmt --all -- --check", &[]),
     (
         "lints",

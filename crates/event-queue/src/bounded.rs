@@ -54,7 +54,10 @@ pub enum Tuning {
         /// Target bucket population (> 0); small values mean more, emptier buckets.
         events_per_bucket: f64,
     },
-    /// Fixed width and count, never changed.
+    /// Fixed width and count, never changed: Paul's setting, for simulations whose events are
+    /// never scheduled more than about `buckets × width` ahead of the last pop. Events beyond
+    /// the window wait unsorted and every wrap-around scans them, so times spread over many
+    /// window lengths cost O(n) per wrap; [`Tuning::Auto`] has no such limit.
     Fixed(Layout),
 }
 
@@ -69,7 +72,7 @@ impl Default for Tuning {
 /// Bucket width Δ and number of buckets in the window.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Layout {
-    /// Δ, the time span of one bucket (finite, > 0).
+    /// Δ, the time span of one bucket (finite, > 0, not subnormal).
     pub width: f64,
     /// Number of buckets in the window (≥ 1; rounded up to a power of two).
     pub buckets: usize,
@@ -171,7 +174,7 @@ impl<P> BoundedQueue<P> {
     /// An empty queue with the given tuning.
     ///
     /// # Errors
-    /// [`QueueError::InvalidLayout`] for a non-finite or non-positive width, zero or more than
+    /// [`QueueError::InvalidLayout`] for a width that is not positive, finite and normal, zero or more than
     /// 2²⁸ buckets, or a target bucket population that is not finite and positive.
     pub fn with_tuning(tuning: Tuning) -> Result<Self, QueueError> {
         let layout = match tuning {
@@ -187,9 +190,11 @@ impl<P> BoundedQueue<P> {
                 }
             }
             Tuning::Fixed(layout) => {
-                if !(layout.width.is_finite() && layout.width > 0.0) {
+                if !(layout.width.is_finite() && (1.0 / layout.width).is_finite())
+                    || layout.width <= 0.0
+                {
                     return Err(QueueError::InvalidLayout(
-                        "bucket width must be finite and positive",
+                        "bucket width must be positive, finite, and not subnormal",
                     ));
                 }
                 if layout.buckets == 0 || layout.buckets > MAX_BUCKETS {
@@ -272,6 +277,7 @@ impl<P> BoundedQueue<P> {
     #[inline(always)]
     fn place(&mut self, e: Entry<P>) {
         let x = self.index(e.time);
+        debug_assert!(!x.is_nan(), "bucket index of {} is NaN", e.time);
         if x < (self.cur + 1) as f64 {
             self.current.push(e);
         } else if x < self.window {
@@ -429,9 +435,10 @@ impl<P> BoundedQueue<P> {
         let span = *t_k - t_min;
         // k sampled events stand for k·stride waiting ones.
         let width = events_per_bucket * span / (k * stride) as f64;
-        // Δ below the resolution of the times themselves cannot separate events.
+        // Δ below the resolution of the times themselves cannot separate events, and 1/Δ must
+        // be finite (a subnormal Δ would make the bucket index ∞·0 = NaN).
         let resolution = t_min.abs().max(t_k.abs()) * 4.0 * f64::EPSILON;
-        if !(width.is_finite() && width > resolution) {
+        if !(width > resolution && (1.0 / width).is_finite() && width.is_finite()) {
             return; // a pile of (nearly) equal times: keep the layout that holds them
         }
         // The window reaches WINDOW_REACH times as far as the events now waiting would fill
@@ -601,6 +608,10 @@ mod tests {
             BoundedQueue::<()>::with_tuning(Tuning::Fixed(Layout { width, buckets })).is_err()
         };
         assert!(bad(0.0, 8) && bad(-1.0, 8) && bad(f64::NAN, 8) && bad(f64::INFINITY, 8));
+        assert!(
+            bad(f64::from_bits(1), 8),
+            "a subnormal width has an infinite reciprocal"
+        );
         assert!(bad(1.0, 0) && bad(1.0, (1 << 28) + 1));
         for e in [0.0, -1.0, f64::NAN, f64::INFINITY] {
             let t = Tuning::Auto {

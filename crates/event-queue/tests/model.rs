@@ -89,6 +89,8 @@ fn time_spec() -> impl Strategy<Value = TimeSpec> {
         1 => Just(TimeSpec::Exactly(f64::INFINITY)),
         1 => Just(TimeSpec::Exactly(f64::NEG_INFINITY)),
         1 => Just(TimeSpec::Exactly(-0.0)),
+        // Subnormal times: a tuned width must never become subnormal (1/Δ = ∞).
+        1 => (0u64..16).prop_map(|k| TimeSpec::Exactly(f64::from_bits(k))),
         1 => Just(TimeSpec::Exactly(f64::NAN)),
     ]
 }
