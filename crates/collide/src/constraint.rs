@@ -163,8 +163,12 @@ struct Workspace {
     z: Vec<f64>,
     /// Right-hand side `g`, then the multipliers `μ`.
     rhs: Vec<f64>,
-    /// Diagonal of `Z` before factorisation, to judge the pivots.
-    diag: Vec<f64>,
+    /// `Z` before factorisation (lower triangle), for the pivots and the refinement step.
+    z0: Vec<f64>,
+    /// `g`, kept for the refinement step.
+    g: Vec<f64>,
+    /// Residual `g − Zμ`, then the correction to `μ`.
+    residual: Vec<f64>,
     /// faer's scratch for the factorisation.
     stack: MemBuffer,
     capacity: usize,
@@ -292,7 +296,9 @@ impl Workspace {
         Self {
             z: vec![0.0; capacity * capacity],
             rhs: vec![0.0; capacity],
-            diag: vec![0.0; capacity],
+            z0: vec![0.0; capacity * capacity],
+            g: vec![0.0; capacity],
+            residual: vec![0.0; capacity],
             stack: MemBuffer::new(req),
             capacity,
         }
@@ -348,6 +354,7 @@ impl Workspace {
             let g = grads(alpha);
             self.rhs[alpha] = g.dot(dir[bond.a] * inv_m(bond.a) - dir[bond.b] * inv_m(bond.b));
         }
+        self.g[..nc].copy_from_slice(&self.rhs[..nc]);
         // Z_αβ = Σ_k (1/m_k) ∇_kσ_α·∇_kσ_β: nonzero only through shared atoms. Only the lower
         // triangle is read by the factorisation.
         let z = &mut self.z[..nc * nc];
@@ -366,8 +373,8 @@ impl Workspace {
                 }
                 z[alpha + nc * beta] = sum * ga.dot(gb);
             }
-            self.diag[beta] = z[beta + nc * beta];
         }
+        self.z0[..nc * nc].copy_from_slice(z);
         let mut zmat = MatMut::from_column_major_slice_mut(z, nc, nc);
         let factored = llt::factor::cholesky_in_place(
             zmat.as_mut(),
@@ -378,7 +385,9 @@ impl Workspace {
         );
         // The factor's pivots L_αα² against Z_αα: how much of constraint α is new, not implied
         // by the constraints before it.
-        let pivot = |alpha: usize| zmat[(alpha, alpha)] * zmat[(alpha, alpha)] / self.diag[alpha];
+        let z0 = &self.z0[..nc * nc];
+        let pivot =
+            |alpha: usize| zmat[(alpha, alpha)] * zmat[(alpha, alpha)] / z0[alpha * (nc + 1)];
         let dependent = match factored {
             Err(llt::factor::LltError::NonPositivePivot { index }) => Some((index, 0.0)),
             Ok(_) => (0..nc)
@@ -392,14 +401,33 @@ impl Workspace {
                 tolerance: PIVOT_TOLERANCE,
             });
         }
-        let rhs = MatMut::from_column_major_slice_mut(&mut self.rhs[..nc], nc, 1);
-        llt::solve::solve_in_place(
-            zmat.as_ref(),
-            rhs,
-            faer::Par::Seq,
-            MemStack::new(&mut self.stack),
-        );
-        Ok(&self.rhs[..nc])
+        let mu = &mut self.rhs[..nc];
+        let solve = |x: &mut [f64], stack: &mut MemBuffer| {
+            let x = MatMut::from_column_major_slice_mut(x, nc, 1);
+            llt::solve::solve_in_place(zmat.as_ref(), x, faer::Par::Seq, MemStack::new(stack));
+        };
+        solve(mu, &mut self.stack);
+        // One step of iterative refinement: atom masses spanning orders of magnitude make Z
+        // badly scaled, and the residual g − Zμ is exactly the velocity-constraint error the
+        // impulse would leave (000 §IV.A). One step brings it back to round-off of g.
+        let residual = &mut self.residual[..nc];
+        for alpha in 0..nc {
+            let mut r = self.g[alpha];
+            for (beta, m) in mu.iter().enumerate() {
+                let (lo, hi) = if alpha >= beta {
+                    (alpha, beta)
+                } else {
+                    (beta, alpha)
+                };
+                r -= z0[lo + nc * hi] * m;
+            }
+            residual[alpha] = r;
+        }
+        solve(residual, &mut self.stack);
+        for (m, d) in mu.iter_mut().zip(residual.iter()) {
+            *m += d;
+        }
+        Ok(mu)
     }
 }
 
