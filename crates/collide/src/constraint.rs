@@ -392,7 +392,7 @@ impl Workspace {
             Err(llt::factor::LltError::NonPositivePivot { index }) => Some((index, 0.0)),
             Ok(_) => (0..nc)
                 .map(|alpha| (alpha, pivot(alpha)))
-                .find(|&(_, p)| !(p >= PIVOT_TOLERANCE)),
+                .find(|&(_, p)| p.is_nan() || p < PIVOT_TOLERANCE),
         };
         if let Some((index, pivot)) = dependent {
             return Err(CollideError::DependentConstraints {
@@ -411,7 +411,7 @@ impl Workspace {
         // badly scaled, and the residual g − Zμ is exactly the velocity-constraint error the
         // impulse would leave (000 §IV.A). One step brings it back to round-off of g.
         let residual = &mut self.residual[..nc];
-        for alpha in 0..nc {
+        for (alpha, res) in residual.iter_mut().enumerate() {
             let mut r = self.g[alpha];
             for (beta, m) in mu.iter().enumerate() {
                 let (lo, hi) = if alpha >= beta {
@@ -421,7 +421,7 @@ impl Workspace {
                 };
                 r -= z0[lo + nc * hi] * m;
             }
-            residual[alpha] = r;
+            *res = r;
         }
         solve(residual, &mut self.stack);
         for (m, d) in mu.iter_mut().zip(residual.iter()) {

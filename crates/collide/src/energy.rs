@@ -88,7 +88,7 @@ pub fn solve(a: f64, b: f64, delta_v: f64) -> Result<Impulse, CollideError> {
         return Err(CollideError::PotentialChange(delta_v));
     }
     let d = discriminant(a, b, delta_v);
-    if !(d < f64::INFINITY) {
+    if d.is_nan() || d == f64::INFINITY {
         // b² or 4aΔV overflowed (or both, giving NaN); -∞ alone is an effectively infinite
         // barrier and reflects correctly below.
         return Err(CollideError::Overflow { a, b, delta_v });
