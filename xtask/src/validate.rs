@@ -30,14 +30,24 @@ pub(crate) struct Check {
 }
 
 /// Every validation, in the order the report shows them.
-pub(crate) const CHECKS: &[Check] = &[Check {
-    name: "event-queue",
-    title: "Event queue: model check at scale and the hold benchmark",
-    package: "dmd-event-queue",
-    example: "validate",
-    full: &["--events", "10000000"],
-    quick: &["--events", "200000", "--quick"],
-}];
+pub(crate) const CHECKS: &[Check] = &[
+    Check {
+        name: "event-queue",
+        title: "Event queue: model check at scale and the hold benchmark",
+        package: "dmd-event-queue",
+        example: "validate",
+        full: &["--events", "10000000"],
+        quick: &["--events", "200000", "--quick"],
+    },
+    Check {
+        name: "collide",
+        title: "Impulse rules: conservation, constraints, reversibility and cross-check statistics",
+        package: "dmd-collide",
+        example: "validate",
+        full: &["--events", "1000000"],
+        quick: &["--events", "20000", "--quick"],
+    },
+];
 
 pub(crate) fn run(args: &[String]) -> Result<(), String> {
     let quick = args.iter().any(|a| a == "--quick");
