@@ -9,6 +9,11 @@
 //! [`StdHeap`] wraps `std::collections::BinaryHeap` in the [`EventQueue`] trait so the standard
 //! library's heap runs the very same workload as the queues of this crate.
 //!
+//! [`PairHold`] is the variant for schedulers that keep one event per participant: each step
+//! executes the earliest event and gives its participant and a random partner new events, as a
+//! collision does. It runs on a [`TournamentTree`] or on a [`LazyQueue`] (where the partner's
+//! old event is left behind, stale).
+//!
 //! ```
 //! use event_queue::hold::{Increment, Hold, StdHeap};
 //! use event_queue::BoundedQueue;
@@ -22,7 +27,7 @@
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
-use crate::{Event, EventQueue, QueueError};
+use crate::{Event, EventQueue, LazyQueue, QueueError, Ticket, TournamentTree};
 
 /// Distribution of the increment added to the popped time, with mean 1.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -109,6 +114,95 @@ impl<Q: EventQueue<Payload = u64>> Hold<Q> {
     /// The queue, for its statistics.
     pub fn queue(&self) -> &Q {
         &self.queue
+    }
+}
+
+/// A scheduler that keeps one pending event per participant.
+pub trait PairScheduler {
+    /// The participant with the earliest event and its time. The event counts as executed: the
+    /// caller must [`reschedule`](Self::reschedule) that participant before the next call.
+    fn next(&mut self) -> Option<(u32, f64)>;
+    /// Replaces participant `p`'s pending event (if any) by one at `time`.
+    fn reschedule(&mut self, p: u32, time: f64);
+}
+
+impl PairScheduler for TournamentTree {
+    #[inline]
+    fn next(&mut self) -> Option<(u32, f64)> {
+        // No need to clear the leaf: the caller overwrites it (one path update, not two).
+        self.min().map(|(p, t)| (p as u32, t))
+    }
+
+    #[inline]
+    fn reschedule(&mut self, p: u32, time: f64) {
+        self.set(p as usize, time).expect("increments are finite");
+    }
+}
+
+impl<Q: EventQueue<Payload = Ticket>> PairScheduler for LazyQueue<Q> {
+    #[inline]
+    fn next(&mut self) -> Option<(u32, f64)> {
+        self.pop().map(|e| (e.payload.first(), e.time))
+    }
+
+    #[inline]
+    fn reschedule(&mut self, p: u32, time: f64) {
+        self.invalidate(p);
+        let ticket = self.book().ticket1(p);
+        self.schedule(time, ticket).expect("increments are finite");
+    }
+}
+
+/// The pair-hold model: `n` participants with one event each; a step executes the earliest and
+/// reschedules its participant and a partner drawn uniformly from the others.
+#[derive(Clone, Debug)]
+pub struct PairHold<S> {
+    scheduler: S,
+    n: u32,
+    increment: Increment,
+    rng: SplitMix64,
+}
+
+impl<S: PairScheduler> PairHold<S> {
+    /// Gives each of `n ≥ 2` participants a first event at an increment from time zero.
+    ///
+    /// # Panics
+    /// If `n < 2`.
+    pub fn new(mut scheduler: S, n: u32, increment: Increment, seed: u64) -> Self {
+        assert!(n >= 2, "the pair-hold model needs two participants");
+        let mut rng = SplitMix64(seed);
+        for p in 0..n {
+            scheduler.reschedule(p, increment.draw(&mut rng));
+        }
+        Self {
+            scheduler,
+            n,
+            increment,
+            rng,
+        }
+    }
+
+    /// Performs `steps` steps; returns the time of the last event executed.
+    #[inline(never)]
+    pub fn run(&mut self, steps: u64) -> f64 {
+        let mut last = 0.0;
+        for _ in 0..steps {
+            let Some((p, t)) = self.scheduler.next() else {
+                break;
+            };
+            last = t;
+            let q = (p + 1 + (self.rng.next_u64() % u64::from(self.n - 1)) as u32) % self.n;
+            let tp = t + self.increment.draw(&mut self.rng);
+            let tq = t + self.increment.draw(&mut self.rng);
+            self.scheduler.reschedule(p, tp);
+            self.scheduler.reschedule(q, tq);
+        }
+        last
+    }
+
+    /// The scheduler, for its statistics.
+    pub fn scheduler(&self) -> &S {
+        &self.scheduler
     }
 }
 
@@ -218,6 +312,27 @@ mod tests {
             // Mean increment 1 and 500 events: time advances by ~1/500 per hold.
             assert!((20.0..60.0).contains(&a), "{a}");
         }
+    }
+
+    #[test]
+    fn pair_hold_agrees_on_tree_and_lazy_queues() {
+        let n = 300;
+        let a = PairHold::new(
+            TournamentTree::new(n as usize),
+            n,
+            Increment::Exponential,
+            5,
+        )
+        .run(50_000);
+        let bounded = LazyQueue::new(BoundedQueue::new(), n as usize);
+        let b = PairHold::new(bounded, n, Increment::Exponential, 5).run(50_000);
+        let heap = LazyQueue::new(HeapQueue::new(), n as usize);
+        let mut c = PairHold::new(heap, n, Increment::Exponential, 5);
+        assert_eq!(a, b);
+        assert_eq!(a, c.run(50_000));
+        // Each step leaves the partner's old event behind.
+        let s = c.scheduler().stats();
+        assert!(s.dropped_stale + s.swept > 40_000, "{s:?}");
     }
 
     #[test]

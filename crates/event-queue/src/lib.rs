@@ -11,6 +11,8 @@
 //!   [`Ticket`] an event carries, so that events made obsolete by an earlier event are recognised
 //!   and dropped when popped instead of being searched for and cancelled; [`LazyQueue`] puts a
 //!   queue and a book together the way an event loop uses them;
+//! - [`TournamentTree`], a complete binary tree with one leaf per participant, for schedulers
+//!   that keep exactly one event per participant (no stale events at all);
 //! - [`hold`], the classic hold model that benchmarks a queue (and a `std` heap adapter).
 //!
 //! Every queue pops in the same total order: by time, then first-in, first-out among equal
@@ -42,11 +44,13 @@ pub mod hold;
 mod lazy;
 mod order;
 mod stamp;
+mod tournament;
 
 pub use bounded::{BoundedQueue, BoundedStats, DEFAULT_EVENTS_PER_BUCKET, Layout, Tuning};
 pub use heap::HeapQueue;
 pub use lazy::{Cleanup, LazyQueue, LazyStats};
 pub use stamp::{ParticipantId, Stamp, StampBook, Stamped, Ticket};
+pub use tournament::TournamentTree;
 
 use order::Entry;
 
