@@ -12,6 +12,7 @@
 
 use crate::axes::{AxisOrder, to_invariant_frame};
 use crate::elliptic::{Jacobi, pi_over_k, rf};
+use crate::exact::Dd;
 use crate::theta::ThetaSeries;
 use glam::{DMat3, DVec3};
 
@@ -30,16 +31,16 @@ pub(crate) struct Invariants {
 impl Invariants {
     /// `Δ_k` of `i` (ordered moments) and `omega` (ordered, not all zero), cancellation-free:
     /// `Δ1 = I2ω2²(I2 − I1) + I3ω3²(I3 − I1)` and cyclically (free-rigid-body.md, **[fix]**).
+    /// `Δ1`, `Δ3` are sums of like-signed terms; `Δ2`, whose terms cancel near the separatrix,
+    /// is evaluated in double-double ([`delta_mid`](Self::delta_mid)).
     pub(crate) fn new(i: DVec3, omega: DVec3) -> Self {
-        let big = omega.abs().max_element();
-        let e = big.log2().floor().clamp(-1000.0, 1000.0) as i32;
-        let scale = 2f64.powi(-e);
+        let scale = pow2_scale(omega);
         let w = omega * scale;
         let q = i * w * w; // I_k ω_k²
         Self {
             delta: [
                 q.y * (i.y - i.x) + q.z * (i.z - i.x),
-                q.x * (i.x - i.y) + q.z * (i.z - i.y),
+                Self::delta_mid(i, omega, 0, 1, 2),
                 q.x * (i.x - i.z) + q.y * (i.y - i.z),
             ],
             scale,
@@ -47,13 +48,27 @@ impl Invariants {
         }
     }
 
-    /// `Δ2` of any axis order with intermediate moment on `mid` and the other two on `a`, `c`.
+    /// `Δ2 = I_a ω_a² (I_a − I_mid) + I_c ω_c² (I_c − I_mid)` of the angular velocity scaled as in
+    /// [`Invariants::new`], for any axis order (intermediate moment on `mid`), in double-double
+    /// so that its sign (which decides the ordering) and its value (which gives `m_c`) are those
+    /// of the exact inputs.
     pub(crate) fn delta_mid(i: DVec3, omega: DVec3, a: usize, mid: usize, c: usize) -> f64 {
-        let big = omega.abs().max_element();
-        let e = big.log2().floor().clamp(-1000.0, 1000.0) as i32;
-        let w = omega * 2f64.powi(-e);
-        i[a] * w[a] * w[a] * (i[a] - i[mid]) + i[c] * w[c] * w[c] * (i[c] - i[mid])
+        let w = omega * pow2_scale(omega);
+        let term = |k: usize| {
+            Dd::prod(w[k], w[k])
+                .mul_f64(i[k])
+                .mul(Dd::diff(i[k], i[mid]))
+        };
+        term(a).add(term(c)).value()
     }
+}
+
+/// The power of two that brings the largest component of `v` (non-zero) near 1, so that no
+/// square under- or overflows.
+fn pow2_scale(v: DVec3) -> f64 {
+    let big = v.abs().max_element();
+    let e = big.log2().floor().clamp(-1000.0, 1000.0) as i32;
+    2f64.powi(-e)
 }
 
 /// `AGM(1, b)` by the plain iteration (quadratic convergence).

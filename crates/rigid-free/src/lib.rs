@@ -32,6 +32,7 @@ mod attitude;
 mod axes;
 pub mod elliptic;
 mod error;
+mod exact;
 mod linear;
 mod moments;
 mod motion;
