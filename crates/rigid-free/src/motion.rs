@@ -234,9 +234,13 @@ impl FreeMotion {
         &self.moments
     }
 
-    /// The pose at time `t` after the state this motion was built from.
+    /// The pose at time `t` after the state this motion was built from. At `t = 0` it is that
+    /// state, bit for bit.
     #[inline]
     pub fn pose(&self, t: f64) -> Pose {
+        if t == 0.0 {
+            return self.initial_pose();
+        }
         let (orientation, omega) = match &self.case {
             Case::Rest => (self.orientation0, DVec3::ZERO),
             Case::Uniform(u) => (u.orientation(t), u.omega()),
@@ -250,6 +254,9 @@ impl FreeMotion {
     /// The body-frame angular velocity at time `t` (cheaper than [`FreeMotion::pose`]).
     #[inline]
     pub fn omega(&self, t: f64) -> DVec3 {
+        if t == 0.0 {
+            return self.omega0;
+        }
         match &self.case {
             Case::Rest => DVec3::ZERO,
             Case::Uniform(u) => u.omega(),
