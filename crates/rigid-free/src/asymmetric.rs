@@ -14,6 +14,7 @@ use crate::axes::{AxisOrder, to_invariant_frame};
 use crate::elliptic::{Jacobi, pi_over_k, rf};
 use crate::exact::Dd;
 use crate::theta::ThetaSeries;
+use crate::trig::sin_cos;
 use glam::{DMat3, DVec3};
 
 /// The invariants of an ordered state (axis 2 intermediate, axis 3 circled by `L`), computed on
@@ -33,14 +34,16 @@ impl Invariants {
     /// `Δ1 = I2ω2²(I2 − I1) + I3ω3²(I3 − I1)` and cyclically (free-rigid-body.md, **[fix]**).
     /// `Δ1`, `Δ3` are sums of like-signed terms; `Δ2`, whose terms cancel near the separatrix,
     /// is evaluated in double-double ([`delta_mid`](Self::delta_mid)).
-    pub(crate) fn new(i: DVec3, omega: DVec3) -> Self {
+    /// `delta2` is [`delta_mid`](Self::delta_mid) of the same ordered state, computed by the
+    /// caller to decide the ordering.
+    pub(crate) fn new(i: DVec3, omega: DVec3, delta2: f64) -> Self {
         let scale = pow2_scale(omega);
         let w = omega * scale;
         let q = i * w * w; // I_k ω_k²
         Self {
             delta: [
                 q.y * (i.y - i.x) + q.z * (i.z - i.x),
-                Self::delta_mid(i, omega, 0, 1, 2),
+                delta2,
                 q.x * (i.x - i.z) + q.y * (i.y - i.z),
             ],
             scale,
@@ -67,8 +70,9 @@ impl Invariants {
 /// square under- or overflows.
 fn pow2_scale(v: DVec3) -> f64 {
     let big = v.abs().max_element();
-    let e = big.log2().floor().clamp(-1000.0, 1000.0) as i32;
-    2f64.powi(-e)
+    // The binary exponent from the bits (subnormals count as 2⁻¹⁰²²).
+    let e = (((big.to_bits() >> 52) & 0x7ff) as i64 - 1023).clamp(-1000, 1000);
+    f64::from_bits(((1023 - e) as u64) << 52)
 }
 
 /// `AGM(1, b)` by the plain iteration (quadratic convergence).
@@ -145,7 +149,7 @@ impl AsymmetricTop {
         let gamma = (i2 * (i3 - i1)).abs();
         let f_psi0 = alpha.sqrt() * rf(beta, beta + m * alpha, gamma);
         let theta = ThetaSeries::new(q, s3 * agm_m * f_psi0);
-        let (s0, c0) = (agm_m * eps).sin_cos();
+        let (s0, c0) = sin_cos(agm_m * eps);
         let (r0_, i0_) = theta.eval(s0, c0);
         let a1 = i0_.atan2(r0_);
 
@@ -193,7 +197,7 @@ impl AsymmetricTop {
     /// Body-frame angular velocity (caller's axes) at time `t`.
     #[inline]
     pub fn omega(&self, t: f64) -> DVec3 {
-        let (sx, cx) = ((self.omega_p * t + self.eps) * self.jacobi.agm()).sin_cos();
+        let (sx, cx) = sin_cos((self.omega_p * t + self.eps) * self.jacobi.agm());
         let f = self.jacobi.from_phase(sx, cx);
         self.order
             .from_ordered(self.amp * DVec3::new(f.cn, f.sn, f.dn))
@@ -203,12 +207,12 @@ impl AsymmetricTop {
     #[inline]
     pub(crate) fn orientation_omega(&self, t: f64) -> (DMat3, DVec3) {
         // One phase x = πu/(2K) serves both the Jacobi functions and the theta series.
-        let (sx, cx) = ((self.omega_p * t + self.eps) * self.jacobi.agm()).sin_cos();
+        let (sx, cx) = sin_cos((self.omega_p * t + self.eps) * self.jacobi.agm());
         let f = self.jacobi.from_phase(sx, cx);
         let w = self.amp * DVec3::new(f.cn, f.sn, f.dn);
         let (r, i) = self.theta.eval(sx, cx);
         let inv = 1.0 / (r * r + i * i).sqrt();
-        let (s, c) = (self.a1 + self.a2 * t).sin_cos();
+        let (s, c) = sin_cos(self.a1 + self.a2 * t);
         // ψ = A1 + A2 t − arg(r + i·i): cos ψ, sin ψ without forming the angle.
         let (cp, sp) = ((c * r + s * i) * inv, (s * r - c * i) * inv);
         let t_now = to_invariant_frame(self.i * w, self.inv_l);

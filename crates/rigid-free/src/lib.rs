@@ -39,6 +39,7 @@ mod motion;
 mod separatrix;
 mod symmetric;
 mod theta;
+mod trig;
 mod uniform;
 
 pub use asymmetric::AsymmetricTop;

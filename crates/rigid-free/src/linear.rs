@@ -65,7 +65,7 @@ impl LinearRotor {
     /// The unit axis at time `t`.
     #[inline]
     pub fn axis(&self, t: f64) -> DVec3 {
-        let (s, c) = (self.rate * t).sin_cos();
+        let (s, c) = crate::trig::sin_cos(self.rate * t);
         self.s0 * c + self.v0 * s
     }
 

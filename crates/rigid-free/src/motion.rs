@@ -196,7 +196,8 @@ impl FreeMotion {
         });
         let io = order.to_ordered(iv).abs();
         let wo = order.to_ordered(omega);
-        let inv = Invariants::new(io, wo);
+        // Δ2 is invariant under the signed permutation (its two terms are swapped, if anything).
+        let inv = Invariants::new(io, wo, d2);
         if inv.delta[2] == 0.0 || inv.delta[0] == 0.0 {
             // ω1 = ω2 = 0 (or ω2 = ω3 = 0) up to underflow of the squares: steady spin.
             return (

@@ -103,7 +103,7 @@ impl SeparatrixTop {
         let w = self.omega_ordered(v);
         let g = v * self.g_lin + self.g_atan * (self.a_over_b * v.tanh()).atan();
         let psi = self.rate * t + self.coef * (g - self.g_eps);
-        let (sp, cp) = psi.sin_cos();
+        let (sp, cp) = crate::trig::sin_cos(psi);
         let t_now = to_invariant_frame(self.i * w, self.inv_l);
         let hr = DMat3::from_cols(
             self.h.x_axis * cp + self.h.y_axis * sp,

@@ -54,16 +54,16 @@ impl SymmetricTop {
     /// Body-frame angular velocity at time `t`: `R_s(ω_p t) ω(0)`.
     #[inline]
     pub fn omega(&self, t: f64) -> DVec3 {
-        let (s, c) = (self.omega_p * t).sin_cos();
+        let (s, c) = crate::trig::sin_cos(self.omega_p * t);
         self.rotate_body(self.omega0, s, c)
     }
 
     /// Orientation `R(t) = A(t)ᵀ` and body-frame angular velocity at time `t`.
     #[inline]
     pub(crate) fn orientation_omega(&self, t: f64) -> (DMat3, DVec3) {
-        let (s1, c1) = (self.rate * t).sin_cos();
+        let (s1, c1) = crate::trig::sin_cos(self.rate * t);
         let b = self.rotation.apply(s1, c1);
-        let (s, c) = (self.omega_p * t).sin_cos();
+        let (s, c) = crate::trig::sin_cos(self.omega_p * t);
         // R(t) = B(t)ᵀ R_s(φ)ᵀ mixes columns k and l of B(t)ᵀ = exp((t/I⊥) W(L_lab)) R0.
         let [_, k, l] = self.axes;
         let mut r = b;

@@ -33,7 +33,7 @@ impl ThetaSeries {
         let mut s = Self {
             q2,
             e2,
-            e2_inv: (-2.0 * h).exp(),
+            e2_inv: 1.0 / e2,
             sign_eta: if eta < 0.0 { -1.0 } else { 1.0 },
             terms: 1,
         };

@@ -35,7 +35,7 @@ impl UniformRotation {
     /// Orientation `R(t) = A(t)ᵀ`.
     #[inline]
     pub(crate) fn orientation(&self, t: f64) -> DMat3 {
-        let (s, c) = (self.rate * t).sin_cos();
+        let (s, c) = crate::trig::sin_cos(self.rate * t);
         self.rotation.apply(s, c)
     }
 }

@@ -6,15 +6,17 @@
 //! shrinks the spread of the arguments by 4. Once the spread is below `(3r)^{1/6}` of their mean
 //! (`r` = 2⁻⁵³), a fifth-order Taylor expansion about the mean is exact to rounding.
 
-/// Relative error the expansions are built for (one rounding of binary64).
-const R: f64 = f64::EPSILON / 2.0;
+/// `(3r)^(−1/6)` and `(r/4)^(−1/6)` for `r = 2⁻⁵³` (one rounding of binary64): Carlson's
+/// stopping scales for R_F and R_J.
+const RF_SCALE: f64 = 379.820_224_302_285_96;
+const RJ_SCALE: f64 = 574.700_568_734_399;
 
 /// Carlson's R_F(x, y, z) for `x, y, z ≥ 0`, at most one of them zero (unchecked).
 pub(crate) fn rf(x: f64, y: f64, z: f64) -> f64 {
     let (mut x, mut y, mut z) = (x, y, z);
     let a0 = (x + y + z) / 3.0;
     // (3r)^(-1/6) · largest distance from the mean: the stopping scale of DLMF 19.36.1.
-    let q = (3.0 * R).powf(-1.0 / 6.0) * (a0 - x).abs().max((a0 - y).abs()).max((a0 - z).abs());
+    let q = RF_SCALE * (a0 - x).abs().max((a0 - y).abs()).max((a0 - z).abs());
     let (x0, y0) = (x, y);
     let mut a = a0;
     let mut pow4 = 1.0_f64; // 4^m
@@ -27,13 +29,17 @@ pub(crate) fn rf(x: f64, y: f64, z: f64) -> f64 {
         z = 0.25 * (z + lambda);
         pow4 *= 4.0;
     }
-    let xx = (a0 - x0) / (pow4 * a);
-    let yy = (a0 - y0) / (pow4 * a);
+    let inv = 1.0 / (pow4 * a);
+    let xx = (a0 - x0) * inv;
+    let yy = (a0 - y0) * inv;
     let zz = -(xx + yy);
     let e2 = xx * yy - zz * zz;
     let e3 = xx * yy * zz;
-    // Carlson (1995) Eq. (2.2), the terms of total degree ≤ 5.
-    (1.0 - e2 / 10.0 + e3 / 14.0 + e2 * e2 / 24.0 - 3.0 * e2 * e3 / 44.0) / a.sqrt()
+    // Carlson (1995) Eq. (2.2), the terms of total degree ≤ 5 (reciprocal constants: one
+    // division instead of five).
+    (1.0 - e2 * (1.0 / 10.0) + e3 * (1.0 / 14.0) + e2 * e2 * (1.0 / 24.0)
+        - e2 * e3 * (3.0 / 44.0))
+        / a.sqrt()
 }
 
 /// `R_C(1, 1 + e) = atan(√e)/√e` (or `atanh(√−e)/√−e`), the degenerate integral R_J needs
@@ -64,7 +70,7 @@ pub(crate) fn rj(x: f64, y: f64, z: f64, p: f64) -> f64 {
     let (mut x, mut y, mut z, mut p) = (x, y, z, p);
     let a0 = (x + y + z + 2.0 * p) / 5.0;
     let delta = (p - x) * (p - y) * (p - z);
-    let q = (0.25 * R).powf(-1.0 / 6.0)
+    let q = RJ_SCALE
         * (a0 - x)
             .abs()
             .max((a0 - y).abs())
@@ -87,9 +93,10 @@ pub(crate) fn rj(x: f64, y: f64, z: f64, p: f64) -> f64 {
         p = 0.25 * (p + lambda);
         pow4 *= 4.0;
     }
-    let xx = (a0 - x0) / (pow4 * a);
-    let yy = (a0 - y0) / (pow4 * a);
-    let zz = (a0 - z0) / (pow4 * a);
+    let inv = 1.0 / (pow4 * a);
+    let xx = (a0 - x0) * inv;
+    let yy = (a0 - y0) * inv;
+    let zz = (a0 - z0) * inv;
     let pp = -0.5 * (xx + yy + zz);
     let p2 = pp * pp;
     let e2 = xx * yy + xx * zz + yy * zz - 3.0 * p2;
@@ -97,10 +104,10 @@ pub(crate) fn rj(x: f64, y: f64, z: f64, p: f64) -> f64 {
     let e4 = (2.0 * xx * yy * zz + e2 * pp + 3.0 * p2 * pp) * pp;
     let e5 = xx * yy * zz * p2;
     // Carlson (1995) Eq. (2.7), the terms of total degree ≤ 5.
-    let series = 1.0 - 3.0 * e2 / 14.0 + e3 / 6.0 + 9.0 * e2 * e2 / 88.0
-        - 3.0 * e4 / 22.0
-        - 9.0 * e2 * e3 / 52.0
-        + 3.0 * e5 / 26.0;
+    let series = 1.0 - e2 * (3.0 / 14.0) + e3 * (1.0 / 6.0) + e2 * e2 * (9.0 / 88.0)
+        - e4 * (3.0 / 22.0)
+        - e2 * e3 * (9.0 / 52.0)
+        + e5 * (3.0 / 26.0);
     series / (pow4 * a * a.sqrt()) + 6.0 * sum
 }
 

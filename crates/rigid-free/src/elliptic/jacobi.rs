@@ -151,7 +151,7 @@ impl Jacobi {
                 dn: sech,
             };
         }
-        let (s, c) = (u * self.agm).sin_cos();
+        let (s, c) = crate::trig::sin_cos(u * self.agm);
         if self.levels == 0 {
             // m ≤ 2⁻⁵² or so: sn = sin, cn = cos to rounding.
             return SnCnDn { sn: s, cn: c, dn: 1.0 };
@@ -209,8 +209,7 @@ mod tests {
         assert_eq!(j.levels(), 0);
         for u in [0.0, 0.3, -2.0, 100.0] {
             let f = j.sn_cn_dn(u);
-            assert_eq!(f.sn, u.sin());
-            assert_eq!(f.cn, u.cos());
+            assert!((f.sn - u.sin()).abs() <= 2.3e-16 && (f.cn - u.cos()).abs() <= 2.3e-16);
             assert_eq!(f.dn, 1.0);
         }
     }
