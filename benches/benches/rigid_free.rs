@@ -86,8 +86,16 @@ fn benches(c: &mut Criterion) {
         "evaluate/asymmetric_near_separatrix",
         &FreeMotion::new(&asym123, a, near_sep).unwrap(),
     );
-    bench_eval(c, "evaluate/symmetric", &FreeMotion::new(&sym, a, w).unwrap());
-    bench_eval(c, "evaluate/sphere", &FreeMotion::new(&sphere, a, w).unwrap());
+    bench_eval(
+        c,
+        "evaluate/symmetric",
+        &FreeMotion::new(&sym, a, w).unwrap(),
+    );
+    bench_eval(
+        c,
+        "evaluate/sphere",
+        &FreeMotion::new(&sphere, a, w).unwrap(),
+    );
     c.bench_function("evaluate/asymmetric_omega_only", |b| {
         let mut t = 0.37;
         b.iter(|| {
@@ -105,7 +113,10 @@ fn benches(c: &mut Criterion) {
     });
 
     // The special function alone.
-    for (name, m_c) in [("jacobi/sn_cn_dn_m0.5", 0.5), ("jacobi/sn_cn_dn_mc1e-12", 1e-12)] {
+    for (name, m_c) in [
+        ("jacobi/sn_cn_dn_m0.5", 0.5),
+        ("jacobi/sn_cn_dn_mc1e-12", 1e-12),
+    ] {
         let j = Jacobi::new(m_c).unwrap();
         c.bench_function(name, |b| {
             let mut u = 0.37;

@@ -30,14 +30,24 @@ pub(crate) struct Check {
 }
 
 /// Every validation, in the order the report shows them.
-pub(crate) const CHECKS: &[Check] = &[Check {
-    name: "event-queue",
-    title: "Event queue: model check at scale and the hold benchmark",
-    package: "dmd-event-queue",
-    example: "validate",
-    full: &["--events", "10000000"],
-    quick: &["--events", "200000", "--quick"],
-}];
+pub(crate) const CHECKS: &[Check] = &[
+    Check {
+        name: "event-queue",
+        title: "Event queue: model check at scale and the hold benchmark",
+        package: "dmd-event-queue",
+        example: "validate",
+        full: &["--events", "10000000"],
+        quick: &["--events", "200000", "--quick"],
+    },
+    Check {
+        name: "rigid-free",
+        title: "Free rigid body: accuracy, error against run time (exact vs RK4), conservation",
+        package: "rigid-free",
+        example: "validate",
+        full: &[],
+        quick: &["--quick"],
+    },
+];
 
 pub(crate) fn run(args: &[String]) -> Result<(), String> {
     let quick = args.iter().any(|a| a == "--quick");

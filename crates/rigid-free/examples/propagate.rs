@@ -14,7 +14,8 @@ use glam::{DMat3, DVec3};
 use rigid_free::{FreeMotion, Moments};
 use std::process::ExitCode;
 
-const USAGE: &str = "usage: propagate --inertia I1,I2,I3 --omega w1,w2,w3 (--time t | --times t1,t2,...)";
+const USAGE: &str =
+    "usage: propagate --inertia I1,I2,I3 --omega w1,w2,w3 (--time t | --times t1,t2,...)";
 
 fn parse_list(flag: &str, text: &str) -> Result<Vec<f64>, String> {
     text.split(',')
@@ -28,8 +29,12 @@ fn parse_list(flag: &str, text: &str) -> Result<Vec<f64>, String> {
 
 fn parse3(flag: &str, text: &str) -> Result<[f64; 3], String> {
     let v = parse_list(flag, text)?;
-    <[f64; 3]>::try_from(v.as_slice())
-        .map_err(|_| format!("{flag} needs exactly 3 comma-separated numbers, got {}", v.len()))
+    <[f64; 3]>::try_from(v.as_slice()).map_err(|_| {
+        format!(
+            "{flag} needs exactly 3 comma-separated numbers, got {}",
+            v.len()
+        )
+    })
 }
 
 pub(crate) fn run(args: &[String]) -> Result<String, String> {

@@ -198,9 +198,9 @@ impl AsymmetricTop {
     #[inline]
     pub fn omega(&self, t: f64) -> DVec3 {
         let (sx, cx) = sin_cos((self.omega_p * t + self.eps) * self.jacobi.agm());
-        let f = self.jacobi.from_phase(sx, cx);
+        let f = self.jacobi.at_phase(sx, cx);
         self.order
-            .from_ordered(self.amp * DVec3::new(f.cn, f.sn, f.dn))
+            .unordered(self.amp * DVec3::new(f.cn, f.sn, f.dn))
     }
 
     /// Orientation `R(t) = A(t)ᵀ` and body-frame angular velocity (caller's axes) at time `t`.
@@ -208,7 +208,7 @@ impl AsymmetricTop {
     pub(crate) fn orientation_omega(&self, t: f64) -> (DMat3, DVec3) {
         // One phase x = πu/(2K) serves both the Jacobi functions and the theta series.
         let (sx, cx) = sin_cos((self.omega_p * t + self.eps) * self.jacobi.agm());
-        let f = self.jacobi.from_phase(sx, cx);
+        let f = self.jacobi.at_phase(sx, cx);
         let w = self.amp * DVec3::new(f.cn, f.sn, f.dn);
         let (r, i) = self.theta.eval(sx, cx);
         let inv = 1.0 / (r * r + i * i).sqrt();
@@ -222,7 +222,6 @@ impl AsymmetricTop {
             self.h.y_axis * cp - self.h.x_axis * sp,
             self.h.z_axis,
         );
-        (self.order.mul_right(hr * t_now), self.order.from_ordered(w))
+        (self.order.mul_right(hr * t_now), self.order.unordered(w))
     }
 }
-

@@ -38,8 +38,8 @@ pub(crate) fn check_rotation(a: DMat3) -> Result<DMat3, FreeError> {
     }
     // Frobenius norm of AᵀA − I (no branches), and det A − 1.
     let g = a.transpose() * a - DMat3::IDENTITY;
-    let frob = (g.x_axis.length_squared() + g.y_axis.length_squared() + g.z_axis.length_squared())
-        .sqrt();
+    let frob =
+        (g.x_axis.length_squared() + g.y_axis.length_squared() + g.z_axis.length_squared()).sqrt();
     let dev = frob.max((a.determinant() - 1.0).abs());
     if dev > 1e-9 {
         return Err(FreeError::NotARotation { deviation: dev });

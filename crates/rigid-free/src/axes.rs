@@ -27,7 +27,7 @@ impl AxisOrder {
 
     /// `Π v`.
     #[inline]
-    pub(crate) fn to_ordered(&self, v: DVec3) -> DVec3 {
+    pub(crate) fn ordered(self, v: DVec3) -> DVec3 {
         DVec3::new(
             self.sign[0] * v[self.index[0]],
             self.sign[1] * v[self.index[1]],
@@ -37,7 +37,7 @@ impl AxisOrder {
 
     /// `Πᵀ v`.
     #[inline]
-    pub(crate) fn from_ordered(&self, v: DVec3) -> DVec3 {
+    pub(crate) fn unordered(self, v: DVec3) -> DVec3 {
         let mut out = DVec3::ZERO;
         for k in 0..3 {
             out[self.index[k]] = self.sign[k] * v[k];
@@ -47,7 +47,7 @@ impl AxisOrder {
 
     /// `M Π`: column `index_k` of the result is `sign_k` times column `k` of `M`.
     #[inline]
-    pub(crate) fn mul_right(&self, m: DMat3) -> DMat3 {
+    pub(crate) fn mul_right(self, m: DMat3) -> DMat3 {
         let mut out = DMat3::ZERO;
         for k in 0..3 {
             *out.col_mut(self.index[k]) = m.col(k) * self.sign[k];
@@ -56,7 +56,7 @@ impl AxisOrder {
     }
 
     /// The matrix `Π`.
-    pub(crate) fn matrix(&self) -> DMat3 {
+    pub(crate) fn matrix(self) -> DMat3 {
         self.mul_right(DMat3::IDENTITY)
     }
 }
@@ -83,13 +83,20 @@ mod tests {
 
     #[test]
     fn signed_permutations_are_proper() {
-        for index in [[0, 1, 2], [2, 1, 0], [1, 0, 2], [0, 2, 1], [1, 2, 0], [2, 0, 1]] {
+        for index in [
+            [0, 1, 2],
+            [2, 1, 0],
+            [1, 0, 2],
+            [0, 2, 1],
+            [1, 2, 0],
+            [2, 0, 1],
+        ] {
             let p = AxisOrder::new(index);
             let m = p.matrix();
             assert_eq!(m.determinant(), 1.0, "{index:?}");
             let v = DVec3::new(1.0, 2.0, 3.0);
-            assert_eq!(p.to_ordered(v), m * v);
-            assert_eq!(p.from_ordered(p.to_ordered(v)), v);
+            assert_eq!(p.ordered(v), m * v);
+            assert_eq!(p.unordered(p.ordered(v)), v);
             let a = DMat3::from_cols_array(&[1., 2., 3., 4., 5., 6., 7., 8., 10.]);
             assert_eq!(p.mul_right(a), a * m);
         }

@@ -64,13 +64,20 @@ impl fmt::Display for FreeError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Self::NonFiniteMoment { axis, value } => {
-                write!(f, "moment of inertia I{} = {value} is not a finite number", axis + 1)
+                write!(
+                    f,
+                    "moment of inertia I{} = {value} is not a finite number",
+                    axis + 1
+                )
             }
             Self::NegativeMoment { axis, value } => {
                 write!(f, "moment of inertia I{} = {value} is negative", axis + 1)
             }
             Self::TooManyZeroMoments => {
-                write!(f, "at most one moment of inertia may be zero (a linear rotor)")
+                write!(
+                    f,
+                    "at most one moment of inertia may be zero (a linear rotor)"
+                )
             }
             Self::ZeroMomentUnequalOthers { others } => write!(
                 f,

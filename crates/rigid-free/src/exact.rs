@@ -98,7 +98,9 @@ mod tests {
         assert_eq!(x.add(Dd::diff(0.0, 3.0)).value(), -3.0 * 2f64.powi(-80));
         // (1 + 2⁻³⁰)(1 + 2⁻⁵⁰) − 1 − 2⁻³⁰ − 2⁻⁵⁰ = 2⁻⁸⁰ (a product of two double-doubles).
         let y = Dd::diff(1.0, -(2f64.powi(-30))).mul(Dd::diff(1.0, -(2f64.powi(-50))));
-        let z = y.add(Dd::diff(-1.0, 2f64.powi(-30))).add(Dd::diff(0.0, 2f64.powi(-50)));
+        let z = y
+            .add(Dd::diff(-1.0, 2f64.powi(-30)))
+            .add(Dd::diff(0.0, 2f64.powi(-50)));
         assert_eq!(z.value(), 2f64.powi(-80));
     }
 }

@@ -89,7 +89,10 @@ mod tests {
             assert!((s.length() - 1.0).abs() < 1e-15);
             assert!(s.dot(rod.omega()).abs() < 1e-15);
         }
-        assert_eq!(LinearRotor::new(DVec3::ZERO, DVec3::X), Err(FreeError::ZeroAxis));
+        assert_eq!(
+            LinearRotor::new(DVec3::ZERO, DVec3::X),
+            Err(FreeError::ZeroAxis)
+        );
         assert!(LinearRotor::new(DVec3::X, DVec3::new(f64::NAN, 0.0, 0.0)).is_err());
         let rest = LinearRotor::new(DVec3::X, DVec3::X).unwrap();
         assert_eq!(rest.axis(7.0), DVec3::X);

@@ -110,7 +110,10 @@ mod tests {
             ([f64::NAN, 1.0, 1.0], "I1 = NaN is not a finite number"),
             ([1.0, -2.0, 2.0], "I2 = -2 is negative"),
             ([0.0, 0.0, 1.0], "at most one moment"),
-            ([1.0, 0.0, 2.0], "other two moments must be equal, but they are 2 and 1"),
+            (
+                [1.0, 0.0, 2.0],
+                "other two moments must be equal, but they are 2 and 1",
+            ),
             ([1.0, 1.0, 2.5], "triangle inequality"),
             ([1.0, f64::INFINITY, 1.0], "I2 = inf is not a finite number"),
         ];

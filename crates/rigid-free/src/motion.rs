@@ -30,6 +30,11 @@ pub enum MotionKind {
 }
 
 /// The propagator of one state, one variant per exact solution (static dispatch).
+///
+/// The asymmetric variant is larger than the others (its AGM table); it is kept inline on
+/// purpose: a simulator stores one value per body, and a box would add an allocation per event
+/// and a pointer chase per evaluation.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Case {
     /// No rotation.
@@ -194,8 +199,8 @@ impl FreeMotion {
         } else {
             [hi, mid, lo]
         });
-        let io = order.to_ordered(iv).abs();
-        let wo = order.to_ordered(omega);
+        let io = order.ordered(iv).abs();
+        let wo = order.ordered(omega);
         // Δ2 is invariant under the signed permutation (its two terms are swapped, if anything).
         let inv = Invariants::new(io, wo, d2);
         if inv.delta[2] == 0.0 || inv.delta[0] == 0.0 {

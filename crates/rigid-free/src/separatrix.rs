@@ -93,7 +93,7 @@ impl SeparatrixTop {
     #[inline]
     pub fn omega(&self, t: f64) -> DVec3 {
         self.order
-            .from_ordered(self.omega_ordered(self.omega_p * t + self.eps))
+            .unordered(self.omega_ordered(self.omega_p * t + self.eps))
     }
 
     /// Orientation `R(t) = A(t)ᵀ` and body-frame angular velocity at time `t`.
@@ -110,6 +110,6 @@ impl SeparatrixTop {
             self.h.y_axis * cp - self.h.x_axis * sp,
             self.h.z_axis,
         );
-        (self.order.mul_right(hr * t_now), self.order.from_ordered(w))
+        (self.order.mul_right(hr * t_now), self.order.unordered(w))
     }
 }

@@ -102,7 +102,10 @@ mod tests {
                 let (rd, id) = direct(q, eta, x);
                 // Same direction: cross product zero, dot product positive.
                 let norm = (r * r + i * i).sqrt() * (rd * rd + id * id).sqrt();
-                assert!((r * id - i * rd).abs() < 1e-14 * norm, "q {q} eta {eta} x {x}");
+                assert!(
+                    (r * id - i * rd).abs() < 1e-14 * norm,
+                    "q {q} eta {eta} x {x}"
+                );
                 assert!(r * rd + i * id > 0.0);
             }
         }

@@ -9,7 +9,8 @@
 //! Jacobi tests); arguments beyond `2²⁰·π/2 ≈ 1.6e6` go to libm. No fused multiply-add is used,
 //! so the result is the same on every target.
 
-const FRAC_2_PI: f64 = 0.636_619_772_367_581_4;
+use std::f64::consts::FRAC_2_PI;
+
 const PIO2_A: f64 = 1.570_796_326_734_125_6;
 const PIO2_B: f64 = 6.077_100_506_303_966e-11;
 const PIO2_C: f64 = 2.022_266_248_795_950_6e-21;
@@ -18,7 +19,7 @@ const LIMIT: f64 = 1_647_099.0; // 2²⁰ · π/2
 /// `(sin x, cos x)`.
 #[inline]
 pub(crate) fn sin_cos(x: f64) -> (f64, f64) {
-    if !(x.abs() < LIMIT) {
+    if x.is_nan() || x.abs() >= LIMIT {
         return x.sin_cos();
     }
     // Round to nearest by the 1.5·2⁵² trick: `f64::round` is a libm call on baseline x86-64.

@@ -69,10 +69,7 @@ fn exactly_equal_moments_use_the_trigonometric_solutions() {
     let a = some_attitude();
     let w = DVec3::new(0.4, -1.2, 0.9);
     assert_eq!(motion([2.0; 3], a, w).kind(), MotionKind::Spherical);
-    assert_eq!(
-        motion([1.0, 2.0, 2.0], a, w).kind(),
-        MotionKind::Symmetric
-    );
+    assert_eq!(motion([1.0, 2.0, 2.0], a, w).kind(), MotionKind::Symmetric);
     // A symmetric top and an asymmetric top 1e-12 away from it agree to ~1e-12·t.
     for (sym, near) in [
         ([1.0, 1.0, 2.0], [1.0, 1.0 + 1e-12, 2.0]),
@@ -142,7 +139,11 @@ fn extreme_speeds_scale_exactly() {
     for s in [1e-150, 1e-20, 1e20, 1e150] {
         let p = motion(i, a, w * s).propagator(7.0 / s);
         assert!(p.is_finite(), "s = {s}");
-        assert!(max_abs(p - base) < 1e-13, "s = {s}: {:e}", max_abs(p - base));
+        assert!(
+            max_abs(p - base) < 1e-13,
+            "s = {s}: {:e}",
+            max_abs(p - base)
+        );
     }
 }
 

@@ -50,17 +50,41 @@ fn a_zero_moment_is_a_rod() {
 #[test]
 fn bad_arguments_get_a_clear_error() {
     for (args, want) in [
-        ("--inertia -1,2,3 --omega 1,1,1 --time 1", "I1 = -1 is negative"),
-        ("--inertia 0,0,1 --omega 1,1,1 --time 1", "at most one moment"),
+        (
+            "--inertia -1,2,3 --omega 1,1,1 --time 1",
+            "I1 = -1 is negative",
+        ),
+        (
+            "--inertia 0,0,1 --omega 1,1,1 --time 1",
+            "at most one moment",
+        ),
         ("--inertia 0,1,2 --omega 1,1,1 --time 1", "must be equal"),
-        ("--inertia 1,1,3 --omega 1,1,1 --time 1", "triangle inequality"),
-        ("--inertia NaN,1,1 --omega 1,1,1 --time 1", "not a finite number"),
-        ("--inertia 1,2,3 --omega 1,NaN,1 --time 1", "angular velocity"),
+        (
+            "--inertia 1,1,3 --omega 1,1,1 --time 1",
+            "triangle inequality",
+        ),
+        (
+            "--inertia NaN,1,1 --omega 1,1,1 --time 1",
+            "not a finite number",
+        ),
+        (
+            "--inertia 1,2,3 --omega 1,NaN,1 --time 1",
+            "angular velocity",
+        ),
         ("--inertia 1,2,3 --omega 1,1 --time 1", "exactly 3"),
-        ("--inertia 1,2,3 --omega 1,x,1 --time 1", "`x` is not a number"),
+        (
+            "--inertia 1,2,3 --omega 1,x,1 --time 1",
+            "`x` is not a number",
+        ),
         ("--inertia 1,2,3 --omega 1,1,1 --time NaN", "time NaN"),
-        ("--inertia 1,2,3 --omega 1,1,1", "--time or --times is required"),
-        ("--inertia 1,2,3 --omega 1,1,1 --time 1 --frobnicate", "unknown argument"),
+        (
+            "--inertia 1,2,3 --omega 1,1,1",
+            "--time or --times is required",
+        ),
+        (
+            "--inertia 1,2,3 --omega 1,1,1 --time 1 --frobnicate",
+            "unknown argument",
+        ),
     ] {
         let e = run(args).unwrap_err();
         assert!(e.contains(want), "{args}: {e}");

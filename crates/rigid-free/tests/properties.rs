@@ -24,11 +24,13 @@ fn moments() -> impl Strategy<Value = [f64; 3]> {
 }
 
 fn attitude() -> impl Strategy<Value = DMat3> {
-    (-1.0f64..1.0, -1.0f64..1.0, -1.0f64..1.0, -1.0f64..1.0)
-        .prop_filter_map("non-zero quaternion", |(w, x, y, z)| {
+    (-1.0f64..1.0, -1.0f64..1.0, -1.0f64..1.0, -1.0f64..1.0).prop_filter_map(
+        "non-zero quaternion",
+        |(w, x, y, z)| {
             let q = DQuat::from_xyzw(x, y, z, w);
             (q.length() > 0.1).then(|| rigid_free::attitude_from_quat(q))
-        })
+        },
+    )
 }
 
 fn omega() -> impl Strategy<Value = DVec3> {

@@ -52,7 +52,12 @@ fn rows(section: &str) -> Vec<Row> {
                 (k.to_owned(), v.parse::<f64>().unwrap())
             })
             .collect();
-        out.push(Row { m_c, m, by_m, fields });
+        out.push(Row {
+            m_c,
+            m,
+            by_m,
+            fields,
+        });
     }
     out
 }
@@ -76,7 +81,11 @@ fn jacobi_sn_cn_dn_to_a_few_ulp() {
             let want = get(r, name);
             let err = (got - want).abs() / (ULP * scale);
             worst = worst.max(err);
-            assert!(err <= 4.0, "m_c={} u={u} {name}: {got} vs {want} ({err:.1} ulp·|u|)", r.m_c);
+            assert!(
+                err <= 4.0,
+                "m_c={} u={u} {name}: {got} vs {want} ({err:.1} ulp·|u|)",
+                r.m_c
+            );
         }
     }
     eprintln!("worst sn/cn/dn error: {worst:.2} ulp·max(1,|u|)");
@@ -92,7 +101,11 @@ fn complete_k_to_a_few_ulp() {
             continue;
         }
         for g in [got, from_agm] {
-            assert!((g - want).abs() <= 3.0 * ULP * want, "m_c={}: {g} vs {want}", r.m_c);
+            assert!(
+                (g - want).abs() <= 3.0 * ULP * want,
+                "m_c={}: {g} vs {want}",
+                r.m_c
+            );
         }
         // K' = K(m) with the roles swapped, where the table has it.
         let kp = get(&r, "K'");
@@ -100,7 +113,11 @@ fn complete_k_to_a_few_ulp() {
         // rounding amplified by 1/m_c: only rows labelled by m give K' exactly.
         if kp.is_finite() && r.by_m {
             let got = complete_k(r.m).unwrap();
-            assert!((got - kp).abs() <= 3.0 * ULP * kp, "K'({}) = {got} vs {kp}", r.m_c);
+            assert!(
+                (got - kp).abs() <= 3.0 * ULP * kp,
+                "K'({}) = {got} vs {kp}",
+                r.m_c
+            );
         }
     }
 }

@@ -37,8 +37,7 @@ pub(crate) fn rf(x: f64, y: f64, z: f64) -> f64 {
     let e3 = xx * yy * zz;
     // Carlson (1995) Eq. (2.2), the terms of total degree ≤ 5 (reciprocal constants: one
     // division instead of five).
-    (1.0 - e2 * (1.0 / 10.0) + e3 * (1.0 / 14.0) + e2 * e2 * (1.0 / 24.0)
-        - e2 * e3 * (3.0 / 44.0))
+    (1.0 - e2 * (1.0 / 10.0) + e3 * (1.0 / 14.0) + e2 * e2 * (1.0 / 24.0) - e2 * e3 * (3.0 / 44.0))
         / a.sqrt()
 }
 
@@ -129,7 +128,11 @@ mod tests {
         // R_F(x, x, x) = x^{-1/2}; R_F(0, 1, 1) = π/2; R_F(0, y, y) = π/(2√y).
         assert!(close(rf(4.0, 4.0, 4.0), 0.5, 1e-16));
         assert!(close(rf(0.0, 1.0, 1.0), std::f64::consts::FRAC_PI_2, 2e-16));
-        assert!(close(rf(0.0, 9.0, 9.0), std::f64::consts::FRAC_PI_2 / 3.0, 5e-16));
+        assert!(close(
+            rf(0.0, 9.0, 9.0),
+            std::f64::consts::FRAC_PI_2 / 3.0,
+            5e-16
+        ));
         // R_J(x, x, x, x) = x^{-3/2}; R_C(0, 1) = π/2; R_C(1, 2) = π/4.
         assert!(close(rj(4.0, 4.0, 4.0, 4.0), 0.125, 2e-16));
         assert!(close(rc(0.0, 1.0), std::f64::consts::FRAC_PI_2, 2e-16));

@@ -154,16 +154,20 @@ impl Jacobi {
         let (s, c) = crate::trig::sin_cos(u * self.agm);
         if self.levels == 0 {
             // m ≤ 2⁻⁵² or so: sn = sin, cn = cos to rounding.
-            return SnCnDn { sn: s, cn: c, dn: 1.0 };
+            return SnCnDn {
+                sn: s,
+                cn: c,
+                dn: 1.0,
+            };
         }
-        self.from_phase(s, c)
+        self.at_phase(s, c)
     }
 
     /// sn, cn, dn from `sin x`, `cos x` of the phase `x = u·AGM(1, √m_c) = πu/(2K)`, for callers
     /// that need the same sine and cosine elsewhere (the theta series of the asymmetric top).
     /// Not for `m_c = 0`.
     #[inline]
-    pub(crate) fn from_phase(&self, sin_x: f64, cos_x: f64) -> SnCnDn {
+    pub(crate) fn at_phase(&self, sin_x: f64, cos_x: f64) -> SnCnDn {
         let (mut s, mut c, mut d) = (sin_x, cos_x, 1.0_f64);
         let mut n = self.levels;
         while n > 0 {
@@ -225,9 +229,23 @@ mod tests {
 
     #[test]
     fn identities_hold_across_parameters() {
-        for m_c in [1e-300, 1e-30, 1e-12, 1e-6, 0.01, 0.3, 0.5, 0.99, 1.0 - 1e-12] {
+        for m_c in [
+            1e-300,
+            1e-30,
+            1e-12,
+            1e-6,
+            0.01,
+            0.3,
+            0.5,
+            0.99,
+            1.0 - 1e-12,
+        ] {
             let j = Jacobi::new(m_c).unwrap();
-            assert!(j.levels() < MAX_LEVELS - 1, "m_c = {m_c}: {} levels", j.levels());
+            assert!(
+                j.levels() < MAX_LEVELS - 1,
+                "m_c = {m_c}: {} levels",
+                j.levels()
+            );
             let m = 1.0 - m_c;
             for i in -40..=40 {
                 let u = 0.37 * f64::from(i);

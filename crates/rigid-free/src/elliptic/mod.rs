@@ -9,10 +9,10 @@ mod carlson;
 mod jacobi;
 mod legendre;
 
-pub use jacobi::{Jacobi, SnCnDn};
-pub use legendre::{complete_k, complete_pi, incomplete_f};
 pub(crate) use carlson::rf;
+pub use jacobi::{Jacobi, SnCnDn};
 pub(crate) use legendre::pi_over_k;
+pub use legendre::{complete_k, complete_pi, incomplete_f};
 
 use crate::FreeError;
 
