@@ -100,16 +100,33 @@ pub fn complete_pi(n: f64, m_c: f64) -> Result<f64, FreeError> {
             value: n,
         });
     }
-    Ok(rf(0.0, m_c, 1.0) + n / 3.0 * rj(0.0, m_c, 1.0, 1.0 - n))
+    let k = rf(0.0, m_c, 1.0);
+    if n >= 0.0 {
+        return Ok(k + n / 3.0 * rj(0.0, m_c, 1.0, 1.0 - n));
+    }
+    // For n < 0 the two terms cancel (badly as n → −∞). The transformation to
+    // N = (m − n)/(1 − n) ∈ (m, 1) (DLMF 19.7.5) leaves a sum of positive terms:
+    // Π(n) = m/(m − n) K − n m_c / ((1 − n)(m − n)) Π(N),  with 1 − N = m_c/(1 − n).
+    let m = 1.0 - m_c;
+    let one_minus_n = 1.0 - n;
+    let m_minus_n = m - n;
+    let big_n = m_minus_n / one_minus_n;
+    let pi_big_n = k + big_n / 3.0 * rj(0.0, m_c, 1.0, m_c / one_minus_n);
+    Ok(m / m_minus_n * k - n * m_c / (one_minus_n * m_minus_n) * pi_big_n)
 }
 
 /// `Π(n | m) / K(m)` by the arithmetic-geometric mean (DLMF 19.8.6–19.8.8), reusing the AGM
 /// table of the Jacobi functions: quadratically convergent and free of the R_C logarithms
 /// that make R_J expensive. `n < 1`, `m_c > 0`.
+///
+/// The result is accurate in absolute terms (a few ulp of `max(1, Π/K)`), which is what the
+/// secular rate of the asymmetric top needs; for `n → −∞`, where `Π/K → 0`, the relative error
+/// grows (the public [`complete_pi`] transforms such `n` and stays accurate relatively).
 pub(crate) fn pi_over_k(jacobi: &Jacobi, n: f64) -> f64 {
+    let one_minus_n = 1.0 - n;
     let (a, b) = jacobi.table();
     // Π = π/(4M) (2 + n/(1−n) Σ Q_j) with K = π/(2M): Π/K = 1 + n Σ Q_j / (2(1 − n)).
-    let mut p = (1.0 - n).sqrt();
+    let mut p = one_minus_n.sqrt();
     let mut qj = 1.0_f64;
     let mut sum = 0.0;
     let mut level = 0;
@@ -132,7 +149,7 @@ pub(crate) fn pi_over_k(jacobi: &Jacobi, n: f64) -> f64 {
             break;
         }
     }
-    1.0 + n * sum / (2.0 * (1.0 - n))
+    1.0 + n * sum / (2.0 * one_minus_n)
 }
 
 #[cfg(test)]
@@ -147,6 +164,36 @@ mod tests {
         assert!(complete_pi(1.0, 0.5).is_err());
         assert!(complete_pi(0.5, 0.0).is_err());
         assert_eq!(complete_k(0.0).unwrap(), f64::INFINITY);
+    }
+
+    /// `Π(n | m)` from `reference/special-reference.txt` (40-digit mpmath), both the R_J form
+    /// and the AGM form the propagator uses, including n = −2e8 and m_c = 3e-14.
+    #[test]
+    fn third_kind_against_reference() {
+        let text = include_str!("../../reference/special-reference.txt");
+        let mut count = 0;
+        for line in text.lines().filter(|l| l.starts_with("pi ")) {
+            let v: Vec<f64> = line[3..]
+                .split_whitespace()
+                .map(|x| x.parse().unwrap())
+                .collect();
+            let (n, m_c, want) = (v[0], v[1], v[2]);
+            let got = complete_pi(n, m_c).unwrap();
+            assert!(
+                (got - want).abs() <= 4.0 * f64::EPSILON * want,
+                "R_J form: Π({n} | m_c = {m_c}) = {got}, want {want}"
+            );
+            let k = complete_k(m_c).unwrap();
+            // The AGM form is accurate in absolute terms of Π/K (what the propagator needs).
+            let agm = pi_over_k(&Jacobi::new(m_c).unwrap(), n);
+            let want_ratio = want / k;
+            assert!(
+                (agm - want_ratio).abs() <= 4.0 * f64::EPSILON * want_ratio.max(1.0),
+                "AGM form: Π/K({n} | m_c = {m_c}) = {agm}, want {want_ratio}"
+            );
+            count += 1;
+        }
+        assert_eq!(count, 60);
     }
 
     #[test]
