@@ -40,6 +40,14 @@ pub(crate) const CHECKS: &[Check] = &[
         quick: &["--events", "200000", "--quick"],
     },
     Check {
+        name: "rigid-free",
+        title: "Free rigid body: accuracy, error against run time (exact vs RK4), conservation",
+        package: "rigid-free",
+        example: "validate",
+        full: &[],
+        quick: &["--quick"],
+    },
+    Check {
         name: "collide",
         title: "Impulse rules: conservation, constraints, reversibility and cross-check statistics",
         package: "dmd-collide",
