@@ -17,8 +17,8 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
 
-use event_queue::hold::{Hold, Increment, StdHeap};
-use event_queue::{BoundedQueue, EventQueue, HeapQueue, Layout, Tuning};
+use event_queue::hold::{Hold, Increment, PairHold, PairScheduler, StdHeap};
+use event_queue::{BoundedQueue, EventQueue, HeapQueue, Layout, LazyQueue, TournamentTree, Tuning};
 
 struct Args {
     events: usize,
@@ -254,6 +254,36 @@ fn hold_table(sizes: &[usize], holds: u64) -> Vec<HoldRow> {
     rows
 }
 
+/// Steps per second of the pair-hold model on one scheduler, after n warm-up steps.
+fn steps_per_second<S: PairScheduler>(s: S, n: u32, steps: u64) -> f64 {
+    let mut m = PairHold::new(s, n, Increment::Exponential, 13);
+    m.run(u64::from(n));
+    let t = Instant::now();
+    std::hint::black_box(m.run(steps));
+    steps as f64 / t.elapsed().as_secs_f64()
+}
+
+/// Rows of (n, [tree, lazy heap, lazy bounded] steps/s), median of 3 rounds.
+fn pair_table(sizes: &[usize], steps: u64) -> Vec<(usize, [f64; 3])> {
+    sizes
+        .iter()
+        .map(|&n| {
+            let m = n as u32;
+            let mut rounds = [[0.0; 3]; 3];
+            for round in &mut rounds {
+                round[0] = steps_per_second(TournamentTree::new(n), m, steps);
+                round[1] = steps_per_second(LazyQueue::new(HeapQueue::new(), n), m, steps);
+                round[2] = steps_per_second(LazyQueue::new(BoundedQueue::new(), n), m, steps);
+            }
+            eprintln!("pair hold n={n} done");
+            (
+                n,
+                std::array::from_fn(|k| median3(std::array::from_fn(|r| rounds[r][k]))),
+            )
+        })
+        .collect()
+}
+
 fn plot(rows: &[HoldRow], path: &std::path::Path) -> Result<(), String> {
     use plotters::prelude::*;
     let root = SVGBackend::new(path, (720, 420)).into_drawing_area();
@@ -440,6 +470,27 @@ fn main() -> ExitCode {
                 verdict(flat <= 2.0),
             );
         }
+    }
+    println!("\n### One event per participant: tournament tree or lazy invalidation\n");
+    println!(
+        "The pair-hold model: n participants with one pending event each; a step executes the \
+         earliest and gives it and a random partner new events (exponential increments), as a \
+         collision does. `TournamentTree` updates two leaves; a `LazyQueue` invalidates both \
+         participants and pushes two events, leaving the partner's old one stale. {holds} steps, \
+         median of 3 rounds.\n"
+    );
+    println!(
+        "| n | TournamentTree (steps/s) | LazyQueue<HeapQueue> | LazyQueue<BoundedQueue> | bounded / tree |"
+    );
+    println!("|---|---|---|---|---|");
+    for (n, r) in pair_table(sizes, holds) {
+        println!(
+            "| {n} | {:.3e} | {:.3e} | {:.3e} | {:.2} |",
+            r[0],
+            r[1],
+            r[2],
+            r[2] / r[0]
+        );
     }
     if let Some(dir) = &a.figures {
         if let Err(e) = std::fs::create_dir_all(dir) {
