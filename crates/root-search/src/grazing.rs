@@ -30,7 +30,7 @@
 //! zero counts as a root (a double root, `f` touching zero).
 
 use crate::SearchError;
-use crate::hermite::Hermite;
+use crate::hermite::{Extremum, Hermite};
 use crate::indicator::{Counted, Crossing, Direction, Indicator, Sample, Side};
 use crate::refine::refine;
 
@@ -138,10 +138,14 @@ fn plan(a: &Sample, b: &Sample, side: Side, b_side: Side, lim: &Limits) -> Optio
     let h = b.t - a.t;
     let clamp = |t: f64| t.clamp(a.t + SPLIT_MARGIN * h, b.t - SPLIT_MARGIN * h);
     let cubic = Hermite::new(a, b);
-    let (ext, n) = cubic.extrema();
     if b_side != side {
         // One crossing or three: cut at the first extremum so the bracket keeps only the first.
         // A start exactly at zero must first move off it before a bracket exists.
+        let (ext, n) = if cubic.may_turn() {
+            cubic.extrema()
+        } else {
+            ([Extremum::NONE; 2], 0)
+        };
         return if n > 0 {
             Some(clamp(ext[0].t))
         } else if a.f == 0.0 {
@@ -150,22 +154,29 @@ fn plan(a: &Sample, b: &Sample, side: Side, b_side: Side, lim: &Limits) -> Optio
             None
         };
     }
+    // Most steps end here: the interpolant is monotone.
+    if !cubic.may_turn() {
+        return None;
+    }
     let toward_min = side == Side::Pos;
-    let toward = ext[..n].iter().find(|e| e.is_min == toward_min)?;
-    // The ends bracket the extremum and the interpolant bends one way all along: the tangents
-    // at the ends bound the extremum (below a minimum, above a maximum).
-    let brackets = if toward_min {
-        a.df < 0.0 && b.df > 0.0
-    } else {
-        a.df > 0.0 && b.df < 0.0
-    };
-    if brackets && cubic.bends(toward_min) {
-        let u = (b.f - a.f - b.df * h) / (a.df - b.df);
-        let bound = a.f + a.df * u;
-        if side.sign() * bound > lim.touch {
+    let (rising, falling) = (a.df < 0.0 && b.df > 0.0, a.df > 0.0 && b.df < 0.0);
+    if rising || falling {
+        // Exactly one extremum inside, of known kind: one turning away from zero is harmless.
+        if rising != toward_min {
             return None;
         }
+        // It turns towards zero and the interpolant bends one way all along: the tangents at
+        // the ends bound it (below a minimum, above a maximum) at no cost.
+        if cubic.bends(toward_min) {
+            let u = (b.f - a.f - b.df * h) / (a.df - b.df);
+            let bound = a.f + a.df * u;
+            if side.sign() * bound > lim.touch {
+                return None;
+            }
+        }
     }
+    let (ext, n) = cubic.extrema();
+    let toward = ext[..n].iter().find(|e| e.is_min == toward_min)?;
     // An extremum predicted far from zero compared with how much f varies over the interval
     // would need the interpolant to be wrong by many times that variation: a feature the step
     // does not resolve, which no sampling would see. (It also keeps round-off noise in the

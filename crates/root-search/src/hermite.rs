@@ -75,6 +75,22 @@ impl Hermite {
         self.value_u((t - self.t1) / self.h)
     }
 
+    /// Whether the interpolant may have a critical point inside the interval: a cheap test (no
+    /// square root, no division) that lets most steps skip [`extrema`](Self::extrema).
+    ///
+    /// The slope `3B u² + 2A u + D` is `D` at `u = 0` and `E = D + 2A + 3B` at `u = 1`. If they
+    /// differ in sign there is a critical point inside; if they agree, there are two only when
+    /// the parabola's vertex `−A/3B` lies in `(0, 1)` and its discriminant `A² − 3BD` is positive.
+    #[inline]
+    pub(crate) fn may_turn(&self) -> bool {
+        let e = self.d + 2.0 * self.a + 3.0 * self.b;
+        if self.d * e <= 0.0 {
+            return true;
+        }
+        let vertex_inside = -self.a * self.b > 0.0 && self.a.abs() < 3.0 * self.b.abs();
+        vertex_inside && self.a * self.a - 3.0 * self.b * self.d > 0.0
+    }
+
     /// Whether the interpolant is convex (`up`) or concave (`!up`) over the whole interval: its
     /// second derivative is linear, so its signs at the two ends decide.
     #[inline]
@@ -96,7 +112,7 @@ impl Hermite {
         let mut roots = [f64::NAN; 2];
         let scale = qa.abs().max(qb.abs()).max(qc.abs());
         if scale == 0.0 {
-            return ([NONE; 2], 0);
+            return ([Extremum::NONE; 2], 0);
         }
         if qa.abs() <= 1e-14 * scale {
             // Practically a parabola (B ≈ 0): the slope is linear in u.
@@ -114,7 +130,7 @@ impl Hermite {
         if roots[1] < roots[0] {
             roots.swap(0, 1);
         }
-        let mut out = [NONE; 2];
+        let mut out = [Extremum::NONE; 2];
         let mut n = 0;
         for u in roots {
             if u > 0.0 && u < 1.0 {
@@ -182,11 +198,14 @@ impl Hermite {
     }
 }
 
-const NONE: Extremum = Extremum {
-    t: f64::NAN,
-    value: f64::NAN,
-    is_min: false,
-};
+impl Extremum {
+    /// A placeholder for an unused slot.
+    pub(crate) const NONE: Extremum = Extremum {
+        t: f64::NAN,
+        value: f64::NAN,
+        is_min: false,
+    };
+}
 
 #[cfg(test)]
 mod tests {
@@ -247,6 +266,23 @@ mod tests {
         // Monotone: no extrema.
         let c = Hermite::new(&s(0.0, 0.0, 1.0), &s(1.0, 1.0, 1.0));
         assert_eq!(c.extrema().1, 0);
+    }
+
+    #[test]
+    fn the_cheap_turn_test_agrees_with_the_extrema() {
+        // Slopes sampled over a grid of end values: may_turn must be true whenever an interior
+        // extremum exists (it may be true without one only when a slope vanishes at an end).
+        let vals = [-2.0, -0.7, -0.1, 0.0, 0.3, 1.1, 2.5];
+        for &f2 in &vals {
+            for &d1 in &vals {
+                for &d2 in &vals {
+                    let c = Hermite::new(&s(0.0, 0.4, d1), &s(1.3, f2, d2));
+                    if c.extrema().1 > 0 {
+                        assert!(c.may_turn(), "f2 {f2} d1 {d1} d2 {d2}");
+                    }
+                }
+            }
+        }
     }
 
     #[test]
