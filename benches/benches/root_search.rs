@@ -49,13 +49,26 @@ fn chained<M: Method>(m: &M, corpus: &mut [Case], window: f64) -> u32 {
 
 fn corpus(c: &mut Criterion) {
     let mut cases = cases(2008, 10);
-    let grid = Grid::new(0.008, 0.1).unwrap().with_tolerances(tol(0.008)).unwrap();
-    let fast = Adaptive::new(0.02).unwrap().with_tolerances(tol(0.02)).unwrap();
-    let paper = Adaptive::new(0.005).unwrap().with_tolerances(tol(0.005)).unwrap();
+    let grid = Grid::new(0.008, 0.1)
+        .unwrap()
+        .with_tolerances(tol(0.008))
+        .unwrap();
+    let fast = Adaptive::new(0.02)
+        .unwrap()
+        .with_tolerances(tol(0.02))
+        .unwrap();
+    let paper = Adaptive::new(0.005)
+        .unwrap()
+        .with_tolerances(tol(0.005))
+        .unwrap();
     // Evaluations each case costs the adaptive search, for the bare-evaluation baseline.
     let counts: Vec<u32> = cases
         .iter_mut()
-        .map(|k| fast.start(&mut k.shape, k.t0, k.end, k.seek, f64::INFINITY).unwrap().evals)
+        .map(|k| {
+            fast.start(&mut k.shape, k.t0, k.end, k.seek, f64::INFINITY)
+                .unwrap()
+                .evals
+        })
         .collect();
     eprintln!(
         "evaluations per pass: grid {}, adaptive 0.02 {}, adaptive 0.005 {}",
@@ -85,8 +98,12 @@ fn corpus(c: &mut Criterion) {
     g.bench_function("grid dt=0.008 threshold=0.1", |b| {
         b.iter(|| black_box(pass(&grid, &mut cases)))
     });
-    g.bench_function("adaptive dt=0.02", |b| b.iter(|| black_box(pass(&fast, &mut cases))));
-    g.bench_function("adaptive dt=0.005", |b| b.iter(|| black_box(pass(&paper, &mut cases))));
+    g.bench_function("adaptive dt=0.02", |b| {
+        b.iter(|| black_box(pass(&fast, &mut cases)))
+    });
+    g.bench_function("adaptive dt=0.005", |b| {
+        b.iter(|| black_box(pass(&paper, &mut cases)))
+    });
     g.finish();
 
     let mut g = c.benchmark_group("resume");

@@ -30,14 +30,24 @@ pub(crate) struct Check {
 }
 
 /// Every validation, in the order the report shows them.
-pub(crate) const CHECKS: &[Check] = &[Check {
-    name: "event-queue",
-    title: "Event queue: model check at scale and the hold benchmark",
-    package: "dmd-event-queue",
-    example: "validate",
-    full: &["--events", "10000000"],
-    quick: &["--events", "200000", "--quick"],
-}];
+pub(crate) const CHECKS: &[Check] = &[
+    Check {
+        name: "event-queue",
+        title: "Event queue: model check at scale and the hold benchmark",
+        package: "dmd-event-queue",
+        example: "validate",
+        full: &["--events", "10000000"],
+        quick: &["--events", "200000", "--quick"],
+    },
+    Check {
+        name: "root-search",
+        title: "Root search: missed roots against evaluations over the adversarial corpus",
+        package: "root-search",
+        example: "corpus",
+        full: &[],
+        quick: &["--quick"],
+    },
+];
 
 pub(crate) fn run(args: &[String]) -> Result<(), String> {
     let quick = args.iter().any(|a| a == "--quick");

@@ -151,7 +151,9 @@ mod tests {
             .unwrap()
             .unwrap();
         assert_eq!((w.enter, w.exit), (3.0, 3.0));
-        let w = sphere_window([0.1, 0.0, 0.0], [0.0; 3], 1.0).unwrap().unwrap();
+        let w = sphere_window([0.1, 0.0, 0.0], [0.0; 3], 1.0)
+            .unwrap()
+            .unwrap();
         assert_eq!((w.enter, w.exit), (f64::NEG_INFINITY, f64::INFINITY));
         assert_eq!(sphere_window([2.0, 0.0, 0.0], [0.0; 3], 1.0).unwrap(), None);
     }
@@ -174,7 +176,11 @@ mod tests {
             .unwrap()
             .unwrap();
         let half = (radius * radius - y * y).sqrt();
-        assert!((w.enter - (x - half)).abs() <= 1e-9, "{}", w.enter - (x - half));
+        assert!(
+            (w.enter - (x - half)).abs() <= 1e-9,
+            "{}",
+            w.enter - (x - half)
+        );
         assert!((w.exit - (x + half)).abs() <= 1e-9);
         // The textbook formula for comparison, to show the test can tell them apart.
         let (a, b, c) = (1.0, -x, x * x + y * y - radius * radius);

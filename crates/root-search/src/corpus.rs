@@ -478,7 +478,7 @@ fn make(family: Family, i: usize, rng: &mut Mix) -> Option<Case> {
                 roots.push((rng.range(0.05, 0.95), rng.range(0.01, 0.05)));
             }
             // Half the cases get a close pair, which makes a shallow dip.
-            if i % 2 == 0 {
+            if i.is_multiple_of(2) {
                 let (r, w) = roots[0];
                 roots.push((r + rng.log_range(1e-4, 1e-2), w));
             }
@@ -550,7 +550,13 @@ fn make(family: Family, i: usize, rng: &mut Mix) -> Option<Case> {
             let mut k = match i % 4 {
                 0 => {
                     let slope = rng.log_range(1e-14, 1e-10) * rng.sign();
-                    case(family, Shape::Power { k: slope, r, n: 1 }, 0.0, 1.0, Crossing::Either)
+                    case(
+                        family,
+                        Shape::Power { k: slope, r, n: 1 },
+                        0.0,
+                        1.0,
+                        Crossing::Either,
+                    )
                 }
                 1 => case(
                     family,
@@ -933,7 +939,13 @@ mod tests {
                 continue;
             }
             let r = reference_root(&mut case.shape, case.t0, case.end, case.seek, 1e-4);
-            assert_eq!(case.judge(r.root), Verdict::Right, "{}: {r:?} vs {:?}", case.name, case.expected);
+            assert_eq!(
+                case.judge(r.root),
+                Verdict::Right,
+                "{}: {r:?} vs {:?}",
+                case.name,
+                case.expected
+            );
         }
     }
 
@@ -947,7 +959,17 @@ mod tests {
 
     #[test]
     fn judge_distinguishes_missed_from_wrong() {
-        let mut k = case(Family::Flat, Shape::Power { k: 1.0, r: 0.5, n: 1 }, 0.0, 1.0, Crossing::Rising);
+        let mut k = case(
+            Family::Flat,
+            Shape::Power {
+                k: 1.0,
+                r: 0.5,
+                n: 1,
+            },
+            0.0,
+            1.0,
+            Crossing::Rising,
+        );
         k.expected = Some(0.5);
         assert_eq!(k.judge(Some(0.5 + 1e-12)), Verdict::Right);
         assert_eq!(k.judge(Some(0.6)), Verdict::Missed);

@@ -57,7 +57,10 @@ impl fmt::Display for SearchError {
                 write!(f, "setting `{name}` = {value} is invalid: it must be {why}")
             }
             SearchError::BadTime { what, value } => {
-                write!(f, "the {what} of the search is {value}; it must be a finite time")
+                write!(
+                    f,
+                    "the {what} of the search is {value}; it must be a finite time"
+                )
             }
             SearchError::ReversedBracket { start, end } => write!(
                 f,

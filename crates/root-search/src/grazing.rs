@@ -128,9 +128,7 @@ pub(crate) fn examine<I: Indicator + ?Sized>(
 /// away from it (a sample that is merely close to zero on its way across is not one).
 #[inline]
 pub(crate) fn touches(b: &Sample, side: Side, lim: &Limits) -> bool {
-    side.sign() * b.f <= lim.touch
-        && side.sign() * b.df >= 0.0
-        && lim.seek.accepts(side.leaving())
+    side.sign() * b.f <= lim.touch && side.sign() * b.df >= 0.0 && lim.seek.accepts(side.leaving())
 }
 
 /// Where to split `[a, b]`, or `None` when the interval can be treated as monotone.
@@ -175,13 +173,19 @@ fn plan(a: &Sample, b: &Sample, side: Side, b_side: Side, lim: &Limits) -> Optio
             }
         }
     }
+    // The same test as below on a cheap bound: the interpolant stays within `reach` of f(a).
+    let s = side.sign();
+    let reach = cubic.reach();
+    let spread = reach + (a.f - b.f).abs();
+    if s * a.f - reach - lim.touch > RESOLVED * spread {
+        return None;
+    }
     let (ext, n) = cubic.extrema();
     let toward = ext[..n].iter().find(|e| e.is_min == toward_min)?;
     // An extremum predicted far from zero compared with how much f varies over the interval
     // would need the interpolant to be wrong by many times that variation: a feature the step
     // does not resolve, which no sampling would see. (It also keeps round-off noise in the
     // slopes of a flat f from being chased as extrema.)
-    let s = side.sign();
     let distance = s * toward.value - lim.touch;
     let variation = (s * a.f).min(s * b.f) - s * toward.value + (a.f - b.f).abs();
     if distance > RESOLVED * variation.max(0.0) {
@@ -331,7 +335,7 @@ mod tests {
 
     #[test]
     fn three_crossings_in_one_interval_give_the_first() {
-        let mut f = |t: f64| ((t - 1.0) * (t - 1.1) * (t - 1.2), 0.0);
+        let f = |t: f64| ((t - 1.0) * (t - 1.1) * (t - 1.2), 0.0);
         let mut g = |t: f64| (f(t).0, 3.0 * t * t - 6.6 * t + 3.62);
         let (v, _) = run(&mut g, 0.9, 1.3, Crossing::Either);
         match v {
@@ -358,7 +362,10 @@ mod tests {
             seek: Crossing::Rising,
             ..touchy
         };
-        assert_eq!(run_with(&mut f, 0.0, 1.0, &rising).0, Verdict::Passed(Side::Pos));
+        assert_eq!(
+            run_with(&mut f, 0.0, 1.0, &rising).0,
+            Verdict::Passed(Side::Pos)
+        );
         // Without the margin, f must land exactly on zero to count: either outcome is
         // acceptable, but never a root elsewhere.
         match run(&mut f, 0.0, 1.0, Crossing::Falling).0 {

@@ -91,6 +91,13 @@ impl Hermite {
         vertex_inside && self.a * self.a - 3.0 * self.b * self.d > 0.0
     }
 
+    /// A bound on how far the interpolant strays from its value at the start of the interval:
+    /// `|f_c − f₁| ≤ |D| + |A| + |B|` for `u ∈ [0, 1]`.
+    #[inline]
+    pub(crate) fn reach(&self) -> f64 {
+        self.d.abs() + self.a.abs() + self.b.abs()
+    }
+
     /// Whether the interpolant is convex (`up`) or concave (`!up`) over the whole interval: its
     /// second derivative is linear, so its signs at the two ends decide.
     #[inline]

@@ -55,7 +55,11 @@ pub(crate) fn refine<I: Indicator + ?Sized>(
         let step = -m.f / m.df;
         if step.abs() <= tol + 2.0 * f64::EPSILON * x.abs() {
             let next = x + step;
-            return Ok(if next >= lo.t && next <= hi.t { next } else { x });
+            return Ok(if next >= lo.t && next <= hi.t {
+                next
+            } else {
+                x
+            });
         }
         x += step;
     }
@@ -180,7 +184,12 @@ mod tests {
 
     #[test]
     fn brent_alone_finds_a_steep_root() {
-        let mut f = |t: f64| ((20.0 * (t - 0.123)).tanh(), 20.0 / (20.0 * (t - 0.123)).cosh().powi(2));
+        let mut f = |t: f64| {
+            (
+                (20.0 * (t - 0.123)).tanh(),
+                20.0 / (20.0 * (t - 0.123)).cosh().powi(2),
+            )
+        };
         let (lo, hi) = (sample(&mut f, 0.0), sample(&mut f, 1.0));
         let mut c = Counted::new(&mut f);
         let r = brent(&mut c, lo, hi, 1e-13).unwrap();

@@ -272,7 +272,7 @@ fn run<S: Stepper, I: Indicator + ?Sized>(
             });
         }
         let t = s.next_time(&p, side).min(end);
-        if !(t > p.t) {
+        if t.is_nan() || t <= p.t {
             return Err(SearchError::StepBelowResolution {
                 t: p.t,
                 step: t - p.t,

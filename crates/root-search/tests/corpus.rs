@@ -21,7 +21,12 @@ fn failures<M: Method>(m: &M, corpus: &mut [Case]) -> Vec<String> {
             .unwrap_or_else(|e| panic!("{}: {e}", c.name));
         let v = c.judge(r.root());
         if v != Verdict::Right {
-            out.push(format!("{}: {v:?}: expected {:?}, got {:?}", c.name, c.expected, r.root()));
+            out.push(format!(
+                "{}: {v:?}: expected {:?}, got {:?}",
+                c.name,
+                c.expected,
+                r.root()
+            ));
         }
     }
     out
@@ -30,7 +35,10 @@ fn failures<M: Method>(m: &M, corpus: &mut [Case]) -> Vec<String> {
 #[test]
 fn adaptive_at_the_papers_step_misses_nothing() {
     let mut corpus = cases(41, 5);
-    let a = Adaptive::new(0.005).unwrap().with_tolerances(tol(0.005)).unwrap();
+    let a = Adaptive::new(0.005)
+        .unwrap()
+        .with_tolerances(tol(0.005))
+        .unwrap();
     let f = failures(&a, &mut corpus);
     assert!(f.is_empty(), "{f:#?}");
 }
@@ -38,7 +46,10 @@ fn adaptive_at_the_papers_step_misses_nothing() {
 #[test]
 fn adaptive_with_a_long_step_still_misses_nothing() {
     let mut corpus = cases(43, 5);
-    let a = Adaptive::new(0.02).unwrap().with_tolerances(tol(0.02)).unwrap();
+    let a = Adaptive::new(0.02)
+        .unwrap()
+        .with_tolerances(tol(0.02))
+        .unwrap();
     let f = failures(&a, &mut corpus);
     assert!(f.is_empty(), "{f:#?}");
 }
@@ -46,7 +57,10 @@ fn adaptive_with_a_long_step_still_misses_nothing() {
 #[test]
 fn grid_with_grazing_detection_misses_nothing_at_a_fine_step() {
     let mut corpus = cases(47, 5);
-    let g = Grid::new(0.004, 0.1).unwrap().with_tolerances(tol(0.004)).unwrap();
+    let g = Grid::new(0.004, 0.1)
+        .unwrap()
+        .with_tolerances(tol(0.004))
+        .unwrap();
     let f = failures(&g, &mut corpus);
     assert!(f.is_empty(), "{f:#?}");
 }
@@ -58,9 +72,17 @@ fn the_corpus_defeats_a_grid_without_grazing_detection() {
         .into_iter()
         .filter(|c| c.family == Family::Grazing)
         .collect();
-    let g = Grid::new(0.004, 0.0).unwrap().with_tolerances(tol(0.004)).unwrap();
+    let g = Grid::new(0.004, 0.0)
+        .unwrap()
+        .with_tolerances(tol(0.004))
+        .unwrap();
     let f = failures(&g, &mut corpus);
-    assert!(f.len() >= corpus.len() / 2, "only {} of {} missed", f.len(), corpus.len());
+    assert!(
+        f.len() >= corpus.len() / 2,
+        "only {} of {} missed",
+        f.len(),
+        corpus.len()
+    );
 }
 
 #[test]
@@ -69,14 +91,28 @@ fn the_adaptive_search_is_cheaper_than_a_grid_that_also_misses_nothing() {
     let evals = |m: &dyn Fn(&mut Case) -> u32, corpus: &mut [Case]| -> u32 {
         corpus.iter_mut().map(m).sum()
     };
-    let a = Adaptive::new(0.02).unwrap().with_tolerances(tol(0.02)).unwrap();
-    let g = Grid::new(0.008, 0.1).unwrap().with_tolerances(tol(0.008)).unwrap();
+    let a = Adaptive::new(0.02)
+        .unwrap()
+        .with_tolerances(tol(0.02))
+        .unwrap();
+    let g = Grid::new(0.008, 0.1)
+        .unwrap()
+        .with_tolerances(tol(0.008))
+        .unwrap();
     let ea = evals(
-        &|c| a.start(&mut c.shape, c.t0, c.end, c.seek, f64::INFINITY).unwrap().evals,
+        &|c| {
+            a.start(&mut c.shape, c.t0, c.end, c.seek, f64::INFINITY)
+                .unwrap()
+                .evals
+        },
         &mut corpus,
     );
     let eg = evals(
-        &|c| g.start(&mut c.shape, c.t0, c.end, c.seek, f64::INFINITY).unwrap().evals,
+        &|c| {
+            g.start(&mut c.shape, c.t0, c.end, c.seek, f64::INFINITY)
+                .unwrap()
+                .evals
+        },
         &mut corpus,
     );
     assert!(failures(&a, &mut corpus).is_empty());

@@ -6,10 +6,7 @@ use root_search::{
 };
 
 fn both() -> (Adaptive, Grid) {
-    (
-        Adaptive::new(0.01).unwrap(),
-        Grid::new(0.01, 0.1).unwrap(),
-    )
+    (Adaptive::new(0.01).unwrap(), Grid::new(0.01, 0.1).unwrap())
 }
 
 /// `sin ω(t − t0) + δ`: zero at `t0` up to `δ`, rising there.
@@ -29,19 +26,39 @@ fn a_start_on_the_event_just_executed_moves_off_it() {
         // f rises through zero at t0 (the event just executed): the next falling root is half a
         // period later, whatever side of zero round-off left f(t0) on.
         let mut f = sine(t0, delta);
-        let r = a.start(&mut f, t0, t0 + 1.0, Crossing::Falling, f64::INFINITY).unwrap();
-        assert!((r.root().unwrap() - (t0 + half)).abs() < 1e-9, "adaptive, δ = {delta}");
-        let r = g.start(&mut f, t0, t0 + 1.0, Crossing::Falling, f64::INFINITY).unwrap();
-        assert!((r.root().unwrap() - (t0 + half)).abs() < 1e-9, "grid, δ = {delta}");
+        let r = a
+            .start(&mut f, t0, t0 + 1.0, Crossing::Falling, f64::INFINITY)
+            .unwrap();
+        assert!(
+            (r.root().unwrap() - (t0 + half)).abs() < 1e-9,
+            "adaptive, δ = {delta}"
+        );
+        let r = g
+            .start(&mut f, t0, t0 + 1.0, Crossing::Falling, f64::INFINITY)
+            .unwrap();
+        assert!(
+            (r.root().unwrap() - (t0 + half)).abs() < 1e-9,
+            "grid, δ = {delta}"
+        );
         // After a reflection the slope is reversed: the next rising root is half a period on.
         let mut f = move |t: f64| {
             let (v, d) = sine(t0, -delta)(t);
             (-v, -d)
         };
-        let r = a.start(&mut f, t0, t0 + 1.0, Crossing::Rising, f64::INFINITY).unwrap();
-        assert!((r.root().unwrap() - (t0 + half)).abs() < 1e-9, "adaptive, δ = {delta}");
-        let r = g.start(&mut f, t0, t0 + 1.0, Crossing::Rising, f64::INFINITY).unwrap();
-        assert!((r.root().unwrap() - (t0 + half)).abs() < 1e-9, "grid, δ = {delta}");
+        let r = a
+            .start(&mut f, t0, t0 + 1.0, Crossing::Rising, f64::INFINITY)
+            .unwrap();
+        assert!(
+            (r.root().unwrap() - (t0 + half)).abs() < 1e-9,
+            "adaptive, δ = {delta}"
+        );
+        let r = g
+            .start(&mut f, t0, t0 + 1.0, Crossing::Rising, f64::INFINITY)
+            .unwrap();
+        assert!(
+            (r.root().unwrap() - (t0 + half)).abs() < 1e-9,
+            "grid, δ = {delta}"
+        );
     }
 }
 
@@ -51,8 +68,10 @@ fn an_exact_zero_start_is_not_a_root_even_when_either_direction_is_accepted() {
     let mut f = sine(0.0, 0.0);
     let half = std::f64::consts::PI / 20.0;
     for r in [
-        a.start(&mut f, 0.0, 1.0, Crossing::Either, f64::INFINITY).unwrap(),
-        g.start(&mut f, 0.0, 1.0, Crossing::Either, f64::INFINITY).unwrap(),
+        a.start(&mut f, 0.0, 1.0, Crossing::Either, f64::INFINITY)
+            .unwrap(),
+        g.start(&mut f, 0.0, 1.0, Crossing::Either, f64::INFINITY)
+            .unwrap(),
     ] {
         let Outcome::Root(root) = r.outcome else {
             panic!("{r:?}")
@@ -92,7 +111,9 @@ fn a_pair_through_its_interaction_sphere_with_virtual_events() {
 fn rebasing_a_state_keeps_the_search_on_course() {
     let a = Adaptive::new(0.01).unwrap();
     let mut f = |t: f64| (t - 1000.75, 1.0);
-    let r = a.start(&mut f, 1000.0, 1001.0, Crossing::Rising, 0.1).unwrap();
+    let r = a
+        .start(&mut f, 1000.0, 1001.0, Crossing::Rising, 0.1)
+        .unwrap();
     let Outcome::Suspended(state) = r.outcome else {
         panic!()
     };
@@ -120,7 +141,10 @@ fn bad_input_gets_one_clear_error_each() {
     assert!(err(a.start(&mut f, 1.0, 0.0, Crossing::Either, 1.0)).contains("before"));
     assert!(err(a.start(&mut f, 0.0, 1.0, Crossing::Either, 0.0)).contains("window"));
     assert!(err(a.start(&mut f, 0.0, 1.0, Crossing::Either, f64::NAN)).contains("window"));
-    assert!(err(a.start(&mut f, 0.0, f64::INFINITY, Crossing::Either, f64::INFINITY)).contains("infinite"));
+    assert!(
+        err(a.start(&mut f, 0.0, f64::INFINITY, Crossing::Either, f64::INFINITY))
+            .contains("infinite")
+    );
     let mut nan = |t: f64| if t > 0.3 { (f64::NAN, 1.0) } else { (1.0, 0.0) };
     assert!(err(a.start(&mut nan, 0.0, 1.0, Crossing::Either, 1.0)).contains("NaN"));
     let mut inf = |_t: f64| (1.0, f64::INFINITY);
@@ -156,14 +180,19 @@ fn stiff_wall_far_beyond_the_terraces_is_found_to_full_precision() {
     let mut f = |t: f64| {
         let x = 2.5 - 10.0 * t;
         let x6 = x.powi(-6);
-        (4.0 * (x6 * x6 - x6) - uk, 4.0 * (-12.0 * x6 * x6 + 6.0 * x6) / x * -10.0)
+        (
+            4.0 * (x6 * x6 - x6) - uk,
+            4.0 * (-12.0 * x6 * x6 + 6.0 * x6) / x * -10.0,
+        )
     };
     let y = 0.5 * (1.0 + (1.0f64 + uk).sqrt());
     let expect = (2.5 - y.powf(-1.0 / 6.0)) / 10.0;
     let (a, g) = both();
     for r in [
-        a.start(&mut f, 0.0, 0.24, Crossing::Rising, f64::INFINITY).unwrap(),
-        g.start(&mut f, 0.0, 0.24, Crossing::Rising, f64::INFINITY).unwrap(),
+        a.start(&mut f, 0.0, 0.24, Crossing::Rising, f64::INFINITY)
+            .unwrap(),
+        g.start(&mut f, 0.0, 0.24, Crossing::Rising, f64::INFINITY)
+            .unwrap(),
     ] {
         assert!((r.root().unwrap() - expect).abs() < 1e-12, "{r:?}");
     }

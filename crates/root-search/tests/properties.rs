@@ -26,7 +26,7 @@ fn seek() -> impl Strategy<Value = Crossing> {
 /// The earliest accepted root of `s Π tanh((t − rᵢ)/wᵢ)` after 0, from the list.
 fn earliest(s: f64, roots: &[(f64, f64)], seek: Crossing) -> Option<(f64, Direction)> {
     // The sign at t = 0 is s times (−1)^(number of roots), since every factor is negative there.
-    let mut positive = (s > 0.0) == (roots.len() % 2 == 0);
+    let mut positive = (s > 0.0) == roots.len().is_multiple_of(2);
     for &(r, _) in roots {
         let dir = if positive {
             Direction::Falling
