@@ -68,3 +68,8 @@ pub use grid::Grid;
 pub use indicator::{Crossing, Direction, Indicator};
 pub use search::{Method, Outcome, Report, Root, SearchState};
 pub use tolerance::Tolerances;
+
+/// The README's example, compiled and run as a doctest so it cannot go stale.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;
