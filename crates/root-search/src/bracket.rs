@@ -50,33 +50,22 @@ impl SphereWindow {
 ///
 /// # Errors
 /// [`SearchError::BadSetting`] if a component is not finite or the radius is negative.
+#[inline]
 pub fn sphere_window(
     r: [f64; 3],
     v: [f64; 3],
     radius: f64,
 ) -> Result<Option<SphereWindow>, SearchError> {
-    for (name, x) in [
-        ("relative position", r[0]),
-        ("relative position", r[1]),
-        ("relative position", r[2]),
-        ("relative velocity", v[0]),
-        ("relative velocity", v[1]),
-        ("relative velocity", v[2]),
-    ] {
-        if !x.is_finite() {
-            return Err(SearchError::BadSetting {
-                name,
-                value: x,
-                why: "finite in every component",
-            });
-        }
-    }
-    if !(radius.is_finite() && radius >= 0.0) {
-        return Err(SearchError::BadSetting {
-            name: "radius",
-            value: radius,
-            why: "finite and >= 0",
-        });
+    // One branch on the fast path; the message is only built for bad input.
+    let finite = r[0].is_finite()
+        & r[1].is_finite()
+        & r[2].is_finite()
+        & v[0].is_finite()
+        & v[1].is_finite()
+        & v[2].is_finite()
+        & radius.is_finite();
+    if !(finite && radius >= 0.0) {
+        return Err(bad_input(r, v, radius));
     }
     let dot = |x: [f64; 3], y: [f64; 3]| x[0] * y[0] + x[1] * y[1] + x[2] * y[2];
     let a = dot(v, v);
@@ -116,6 +105,29 @@ pub fn sphere_window(
         enter: t1.min(t2),
         exit: t1.max(t2),
     }))
+}
+
+/// The error naming the first non-finite component or the bad radius.
+#[cold]
+fn bad_input(r: [f64; 3], v: [f64; 3], radius: f64) -> SearchError {
+    let components = r
+        .iter()
+        .map(|&x| ("relative position", x))
+        .chain(v.iter().map(|&x| ("relative velocity", x)));
+    for (name, value) in components {
+        if !value.is_finite() {
+            return SearchError::BadSetting {
+                name,
+                value,
+                why: "finite in every component",
+            };
+        }
+    }
+    SearchError::BadSetting {
+        name: "radius",
+        value: radius,
+        why: "finite and >= 0",
+    }
 }
 
 #[cfg(test)]
