@@ -54,7 +54,7 @@ pub enum Family {
     Tumbling,
     /// A Lennard-Jones wall met at speed, terraces up to `200 ε`.
     Stiff,
-    /// Nearly flat functions: tiny slopes, a fifth-order root, a tiny positive floor.
+    /// Nearly flat functions: slopes down to `1e-9`, a fifth-order root, a tiny positive floor.
     Flat,
     /// A start exactly at zero, or at zero up to round-off, after an event.
     StartAtZero,
@@ -549,7 +549,8 @@ fn make(family: Family, i: usize, rng: &mut Mix) -> Option<Case> {
             let r = rng.range(0.2, 0.8);
             let mut k = match i % 4 {
                 0 => {
-                    let slope = rng.log_range(1e-14, 1e-10) * rng.sign();
+                    // Tiny, yet above the touch margin of 1e-12 at the start.
+                    let slope = rng.log_range(1e-9, 1e-6) * rng.sign();
                     case(
                         family,
                         Shape::Power { k: slope, r, n: 1 },
@@ -572,7 +573,7 @@ fn make(family: Family, i: usize, rng: &mut Mix) -> Option<Case> {
                 2 => case(
                     family,
                     Shape::Tanh {
-                        s: rng.log_range(1e-9, 1e-6) * rng.sign(),
+                        s: rng.log_range(1e-6, 1e-3) * rng.sign(),
                         roots: vec![(r, rng.range(10.0, 100.0))],
                     },
                     0.0,
@@ -603,7 +604,11 @@ fn make(family: Family, i: usize, rng: &mut Mix) -> Option<Case> {
             let offset = rng.pick(&[0.0, 1e-16, -1e-16, 3e-14, -3e-14]);
             // Moving up at t0 (a > 0) after a rising event the pair passed: next is the fall.
             // Moving down (a < 0) after a reflection: next is the rise.
-            let seek = if a > 0.0 {
+            let seek = if i % 3 == 2 {
+                // With a touch margin above the offset, even a search for either direction must
+                // leave the start the way f' points.
+                Crossing::Either
+            } else if a > 0.0 {
                 Crossing::Falling
             } else {
                 Crossing::Rising

@@ -102,13 +102,11 @@ pub(crate) fn examine<I: Indicator + ?Sized>(
         // f is monotone on [a, b] as far as the interpolant can tell.
         if b_side != side {
             let dir = side.leaving();
-            if lim.seek.accepts(dir) {
-                let t = if a.f == 0.0 {
-                    // Left zero and came back within the extremum tolerance.
-                    b.t
-                } else {
-                    refine(ind, a, b, side, lim.root_tol)?
-                };
+            // A start on zero whose f' promised `side` but whose f never got strictly there
+            // within the extremum tolerance: it did not leave zero that way, so there is no
+            // crossing to report, only the side it is really on.
+            if lim.seek.accepts(dir) && a.strictly_on(side) {
+                let t = refine(ind, a, b, side, lim.root_tol)?;
                 return Ok(Verdict::Root(t, dir));
             }
             side = b_side;
@@ -138,7 +136,8 @@ fn plan(a: &Sample, b: &Sample, side: Side, b_side: Side, lim: &Limits) -> Optio
     let cubic = Hermite::new(a, b);
     if b_side != side {
         // One crossing or three: cut at the first extremum so the bracket keeps only the first.
-        // A start exactly at zero must first move off it before a bracket exists.
+        // A start at zero (or within the touch margin of it, on the far side) must first move
+        // off it before a bracket exists.
         let (ext, n) = if cubic.may_turn() {
             cubic.extrema()
         } else {
@@ -146,7 +145,7 @@ fn plan(a: &Sample, b: &Sample, side: Side, b_side: Side, lim: &Limits) -> Optio
         };
         return if n > 0 {
             Some(clamp(ext[0].t))
-        } else if a.f == 0.0 {
+        } else if !a.strictly_on(side) {
             Some(a.t + 0.5 * h)
         } else {
             None
@@ -211,17 +210,16 @@ fn tiny_interval<I: Indicator + ?Sized>(
     if side.sign() * e.value > lim.touch {
         return Ok(None);
     }
+    if !a.strictly_on(side) {
+        return Ok(None);
+    }
     let m = ind.at(e.t)?;
     let m_side = Side::of(m.f, m.df, side);
     if m_side != side {
         // Two crossings inside the interval; which one is wanted depends on the direction.
         let first = side.leaving();
         if lim.seek.accepts(first) {
-            let t = if a.f == 0.0 {
-                m.t
-            } else {
-                refine(ind, *a, m, side, lim.root_tol)?
-            };
+            let t = refine(ind, *a, m, side, lim.root_tol)?;
             return Ok(Some(Verdict::Root(t, first)));
         }
         let t = if m.f == 0.0 {

@@ -109,8 +109,8 @@ impl Stepper for Grid {
         side: Side,
         lim: &Limits,
     ) -> Result<Verdict, SearchError> {
-        if p.f == 0.0 {
-            // A start exactly at zero: only the interpolant can tell where f first goes.
+        if !p.strictly_on(side) {
+            // A start at zero: only the interpolant can tell where f first goes.
             return examine(ind, p, q, side, lim);
         }
         let q_side = Side::of(q.f, q.df, side);

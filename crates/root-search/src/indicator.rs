@@ -121,6 +121,15 @@ pub(crate) struct Sample {
     pub(crate) df: f64,
 }
 
+impl Sample {
+    /// Whether `f` is strictly on `side` here (not zero, not across it): only a start on zero,
+    /// or within the touch margin of it, is not.
+    #[inline]
+    pub(crate) fn strictly_on(&self, side: Side) -> bool {
+        side.sign() * self.f > 0.0
+    }
+}
+
 /// An indicator together with the count of its evaluations and the finiteness check every
 /// evaluation must pass (a NaN must never steer a search silently).
 pub(crate) struct Counted<'a, I: ?Sized> {

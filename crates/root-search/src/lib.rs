@@ -17,9 +17,11 @@
 //! - [`corpus`], adversarial indicators with known roots that test any method.
 //!
 //! Every call reports how many times it evaluated the indicator. Searches ask for a crossing
-//! [`Crossing::Rising`], [`Crossing::Falling`] or [`Crossing::Either`]; after an event, ask
-//! for a direction: `f(t0)` is then zero only up to round-off, and a direction makes a spurious
-//! crossing right after `t0` go the wrong way, so it is skipped.
+//! [`Crossing::Rising`], [`Crossing::Falling`] or [`Crossing::Either`]. After an event `f(t0)`
+//! is zero only up to round-off, and may sit on the wrong side of it: a start within the
+//! [`Tolerances::touch`] margin counts as zero and goes the way `f'(t0)` points, and a search for
+//! a direction skips a round-off crossing right after `t0` in any case, since it goes the wrong
+//! way. Set `touch` to the round-off level of `f`.
 //!
 //! ```
 //! use root_search::{sphere_window, Adaptive, Crossing, Method, Outcome};

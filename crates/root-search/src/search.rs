@@ -121,8 +121,8 @@ pub trait Method {
     /// step that would end after `t0 + window`, returning [`Outcome::Suspended`]. Pass
     /// `f64::INFINITY` to search to the end in one call.
     ///
-    /// A start exactly at zero (`f(t0) = 0`, as after an event) is on the side `f'(t0)` points
-    /// to, so the event just executed is not found again.
+    /// A start at zero (`|f(t0)|` within the touch tolerance, as after an event) is on the side
+    /// `f'(t0)` points to, so the event just executed is not found again.
     ///
     /// # Errors
     /// A NaN or infinite `t0`, a NaN `end`, `end < t0`, a NaN or non-positive `window`, an
@@ -222,7 +222,10 @@ pub(crate) fn start<S: Stepper, I: Indicator + ?Sized>(
         Crossing::Falling => Side::Neg,
         Crossing::Rising | Crossing::Either => Side::Pos,
     };
-    let side = Side::of(p.f, p.df, fallback);
+    // Within the touch margin, f(t0) is zero as far as the search can tell (the event just
+    // executed, up to round-off): f' alone says where f goes.
+    let at_zero = p.f.abs() <= s.limits(seek).touch;
+    let side = Side::of(if at_zero { 0.0 } else { p.f }, p.df, fallback);
     run(s, &mut c, p, side, end, seek, window)
 }
 

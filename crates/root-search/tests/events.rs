@@ -197,3 +197,83 @@ fn stiff_wall_far_beyond_the_terraces_is_found_to_full_precision() {
         assert!((r.root().unwrap() - expect).abs() < 1e-12, "{r:?}");
     }
 }
+
+#[test]
+fn a_touch_margin_makes_a_start_on_zero_safe_for_either_direction() {
+    let touchy = |m: f64| Tolerances {
+        touch: 1e-12,
+        ..Tolerances::relative_to(m)
+    };
+    let a = Adaptive::new(0.01)
+        .unwrap()
+        .with_tolerances(touchy(0.01))
+        .unwrap();
+    let g = Grid::new(0.01, 0.1)
+        .unwrap()
+        .with_tolerances(touchy(0.01))
+        .unwrap();
+    let half = std::f64::consts::PI / 20.0;
+    // Reflected upwards at t0 = 0, with f(0) left a hair below zero: without the margin an
+    // Either search would return the round-off crossing at t ≈ 5e-18.
+    let mut f = sine(0.0, -1e-16);
+    for r in [
+        a.start(&mut f, 0.0, 1.0, Crossing::Either, f64::INFINITY)
+            .unwrap(),
+        g.start(&mut f, 0.0, 1.0, Crossing::Either, f64::INFINITY)
+            .unwrap(),
+    ] {
+        assert!((r.root().unwrap() - half).abs() < 1e-9, "{r:?}");
+    }
+    let plain = Adaptive::new(0.01).unwrap();
+    let r = plain
+        .start(&mut f, 0.0, 1.0, Crossing::Either, f64::INFINITY)
+        .unwrap();
+    assert!(
+        r.root().unwrap() < 1e-15,
+        "without a margin the round-off crossing is found"
+    );
+    // A function that is merely small at the start, and rises to its root much later, is not
+    // mistaken for one that left zero and came back.
+    let mut slow = |t: f64| (1e-13 * (t - 0.5), 1e-13);
+    for r in [
+        a.start(&mut slow, 0.0, 1.0, Crossing::Either, f64::INFINITY)
+            .unwrap(),
+        g.start(&mut slow, 0.0, 1.0, Crossing::Either, f64::INFINITY)
+            .unwrap(),
+    ] {
+        let Outcome::Root(root) = r.outcome else {
+            panic!("{r:?}")
+        };
+        assert!((root.t - 0.5).abs() < 1e-9 && root.direction == Direction::Rising);
+    }
+}
+
+#[test]
+fn a_jittered_step_finds_the_same_roots() {
+    // 003 §V.A: a small random change of the maximum step per call keeps virtual events apart.
+    let base = Adaptive::new(0.005).unwrap();
+    let mut f = |t: f64| {
+        let x = (t - 0.4137) / 0.02;
+        let g = 1.000001 * (-x * x).exp();
+        (1.0 - g, 2.0 * x / 0.02 * g)
+    };
+    let expect = 0.4137 - 0.02 * 1.000001f64.ln().sqrt();
+    let mut state = None;
+    let mut k = 0u32;
+    let root = loop {
+        k += 1;
+        let jitter = 1.0 + 0.01 * ((f64::from(k) * 0.618_033_988_7).fract() - 0.5);
+        let m = base.with_max_step(0.005 * jitter).unwrap();
+        let r = match state {
+            None => m.start(&mut f, 0.0, 1.0, Crossing::Falling, 0.005).unwrap(),
+            Some(s) => m.resume(&mut f, s, 0.005).unwrap(),
+        };
+        match r.outcome {
+            Outcome::Suspended(s) => state = Some(s),
+            Outcome::Root(root) => break root.t,
+            Outcome::NoRoot => panic!("missed the dip"),
+        }
+    };
+    assert!((root - expect).abs() < 1e-10);
+    assert!(k > 50);
+}

@@ -84,6 +84,25 @@ proptest! {
         check(report, earliest(s, &roots, seek))?;
     }
 
+    /// Gaussian dips from 1e-9 to 1e-2 below zero, or as far above it, anywhere between the
+    /// samples: found exactly when they cross, by both methods at settings that resolve them.
+    #[test]
+    fn grazing_dips_are_found_exactly_when_they_cross(
+        c in 0.1f64..0.9, w in 0.01f64..0.05, log_depth in -9.0f64..-2.0,
+        below in any::<bool>(), s in prop_oneof![Just(1.0), Just(-1.0)],
+    ) {
+        let d = if below { 10f64.powf(log_depth) } else { -10f64.powf(log_depth) };
+        let expect = below.then(|| {
+            let dir = if s > 0.0 { Direction::Falling } else { Direction::Rising };
+            (c - w * d.ln_1p().sqrt(), dir)
+        });
+        let a = Adaptive::new(0.02).unwrap().with_tolerances(tol(0.02)).unwrap();
+        let g = Grid::new(0.008, 0.1).unwrap().with_tolerances(tol(0.008)).unwrap();
+        let mut f = Shape::Dip { s, c, w, d };
+        check(a.start(&mut f, 0.0, 1.0, Crossing::Either, f64::INFINITY).unwrap(), expect)?;
+        check(g.start(&mut f, 0.0, 1.0, Crossing::Either, f64::INFINITY).unwrap(), expect)?;
+    }
+
     /// A search cut into windows and resumed gives the same root, bit for bit, with the same
     /// total number of evaluations.
     #[test]
