@@ -48,6 +48,14 @@ pub(crate) const CHECKS: &[Check] = &[
         quick: &["--quick"],
     },
     Check {
+        name: "root-search",
+        title: "Root search: missed roots against evaluations over the adversarial corpus",
+        package: "root-search",
+        example: "corpus",
+        full: &[],
+        quick: &["--quick"],
+    },
+    Check {
         name: "collide",
         title: "Impulse rules: conservation, constraints, reversibility and cross-check statistics",
         package: "dmd-collide",

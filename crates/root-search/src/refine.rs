@@ -1,0 +1,198 @@
+//! Root refinement in a bracket: Newton–Raphson with a safeguard, falling back on the
+//! van Wijngaarden–Dekker–Brent method (000 §III.A).
+//!
+//! Once a sign change is bracketed in `[a, b]`, Newton's method converges in a couple of steps
+//! because `f'` is available at every point. It is started from the earliest root of the cubic
+//! Hermite interpolant of the bracket (003 Eqs. 13–15), which is already accurate to `O(h⁴)`.
+//! 000 demands that a Newton result lie inside the bracket and that `f'` have the sign of the
+//! crossing being refined; every iterate is checked that way, the bracket is shrunk with each
+//! evaluation, and on the first violation Brent's method takes over the shrunken bracket, where
+//! it is guaranteed to converge.
+
+use crate::SearchError;
+use crate::hermite::Hermite;
+use crate::indicator::{Counted, Indicator, Sample, Side};
+
+/// Newton steps before Brent takes over: from the cubic's root two or three suffice, so more
+/// means the function is not behaving like its interpolant.
+const NEWTON_STEPS: usize = 8;
+/// Brent halves the bracket at worst every other step; this bounds any sane bracket.
+const BRENT_STEPS: usize = 400;
+
+/// The root in `[lo.t, hi.t]`, to within `tol` (absolute time) plus round-off of `t`.
+///
+/// `lo` must be strictly on side `from` (`lo.f ≠ 0`); `hi` on the other side or exactly zero.
+pub(crate) fn refine<I: Indicator + ?Sized>(
+    ind: &mut Counted<'_, I>,
+    lo: Sample,
+    hi: Sample,
+    from: Side,
+    tol: f64,
+) -> Result<f64, SearchError> {
+    debug_assert!(lo.f != 0.0 && Side::of(lo.f, lo.df, from) == from);
+    if hi.f == 0.0 {
+        return Ok(hi.t);
+    }
+    let (mut lo, mut hi) = (lo, hi);
+    let mut x = Hermite::new(&lo, &hi).first_root();
+    for _ in 0..NEWTON_STEPS {
+        if !(x > lo.t && x < hi.t) {
+            break;
+        }
+        let m = ind.at(x)?;
+        if m.f == 0.0 {
+            return Ok(x);
+        }
+        if (m.f > 0.0) == (from == Side::Pos) {
+            lo = m;
+        } else {
+            hi = m;
+        }
+        // 000 §III.A: the slope must carry f across zero in the direction being refined.
+        if m.df * from.sign() >= 0.0 {
+            break;
+        }
+        let step = -m.f / m.df;
+        if step.abs() <= tol + 2.0 * f64::EPSILON * x.abs() {
+            let next = x + step;
+            return Ok(if next >= lo.t && next <= hi.t {
+                next
+            } else {
+                x
+            });
+        }
+        x += step;
+    }
+    brent(ind, lo, hi, tol)
+}
+
+/// Brent's zero finder (inverse quadratic interpolation, secant, bisection) on a bracket with
+/// opposite signs at its ends.
+fn brent<I: Indicator + ?Sized>(
+    ind: &mut Counted<'_, I>,
+    lo: Sample,
+    hi: Sample,
+    tol: f64,
+) -> Result<f64, SearchError> {
+    let (mut a, mut fa) = (lo.t, lo.f);
+    let (mut b, mut fb) = (hi.t, hi.f);
+    let (mut c, mut fc) = (b, fb);
+    let (mut d, mut e) = (b - a, b - a);
+    for _ in 0..BRENT_STEPS {
+        if (fb > 0.0) == (fc > 0.0) {
+            // The root is between a and b: c takes a's place as the opposite end.
+            c = a;
+            fc = fa;
+            d = b - a;
+            e = d;
+        }
+        if fc.abs() < fb.abs() {
+            (a, b, c) = (b, c, b);
+            (fa, fb, fc) = (fb, fc, fb);
+        }
+        let tol1 = 2.0 * f64::EPSILON * b.abs() + 0.5 * tol;
+        let xm = 0.5 * (c - b);
+        if xm.abs() <= tol1 || fb == 0.0 {
+            return Ok(b);
+        }
+        if e.abs() >= tol1 && fa.abs() > fb.abs() {
+            let s = fb / fa;
+            let (mut p, mut q);
+            if a == c {
+                // Secant.
+                p = 2.0 * xm * s;
+                q = 1.0 - s;
+            } else {
+                // Inverse quadratic interpolation.
+                let qa = fa / fc;
+                let r = fb / fc;
+                p = s * (2.0 * xm * qa * (qa - r) - (b - a) * (r - 1.0));
+                q = (qa - 1.0) * (r - 1.0) * (s - 1.0);
+            }
+            if p > 0.0 {
+                q = -q;
+            }
+            p = p.abs();
+            if 2.0 * p < (3.0 * xm * q - (tol1 * q).abs()).min((e * q).abs()) {
+                e = d;
+                d = p / q;
+            } else {
+                d = xm;
+                e = d;
+            }
+        } else {
+            d = xm;
+            e = d;
+        }
+        a = b;
+        fa = fb;
+        b += if d.abs() > tol1 { d } else { tol1.copysign(xm) };
+        fb = ind.at(b)?.f;
+    }
+    Ok(b)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample(f: &mut impl FnMut(f64) -> (f64, f64), t: f64) -> Sample {
+        let (v, d) = f(t);
+        Sample { t, f: v, df: d }
+    }
+
+    #[test]
+    fn newton_converges_in_few_steps_on_a_smooth_root() {
+        let mut f = |t: f64| (t.cos() - t, -t.sin() - 1.0);
+        let (lo, hi) = (sample(&mut f, 0.0), sample(&mut f, 1.0));
+        let mut c = Counted::new(&mut f);
+        let r = refine(&mut c, lo, hi, Side::Pos, 1e-13).unwrap();
+        assert!((r - 0.739_085_133_215_160_6).abs() < 1e-13);
+        assert!(c.evals <= 3, "{} evaluations", c.evals);
+    }
+
+    #[test]
+    fn a_triple_root_falls_back_to_brent_and_still_converges() {
+        // f' vanishes at the root: Newton crawls; Brent takes over.
+        let r0 = 0.3;
+        let mut f = |t: f64| ((t - r0).powi(3), 3.0 * (t - r0).powi(2));
+        let (lo, hi) = (sample(&mut f, 0.0), sample(&mut f, 1.0));
+        let mut c = Counted::new(&mut f);
+        let r = refine(&mut c, lo, hi, Side::Neg, 1e-12).unwrap();
+        assert!((r - r0).abs() < 1e-5, "r = {r}"); // f = 1e-15 already below f's resolution
+        assert!(c.evals < 120);
+    }
+
+    #[test]
+    fn a_wrong_slope_sends_the_search_to_brent() {
+        // A derivative that lies (points the wrong way): Newton must not be trusted.
+        let mut f = |t: f64| (0.5 - t, 1.0);
+        let (lo, hi) = (sample(&mut f, 0.0), sample(&mut f, 1.0));
+        let mut c = Counted::new(&mut f);
+        let r = refine(&mut c, lo, hi, Side::Pos, 1e-12).unwrap();
+        assert!((r - 0.5).abs() < 1e-11);
+    }
+
+    #[test]
+    fn exact_zero_at_the_far_end_is_returned_without_evaluation() {
+        let mut f = |t: f64| (1.0 - t, -1.0);
+        let (lo, hi) = (sample(&mut f, 0.0), sample(&mut f, 1.0));
+        let mut c = Counted::new(&mut f);
+        assert_eq!(refine(&mut c, lo, hi, Side::Pos, 1e-12).unwrap(), 1.0);
+        assert_eq!(c.evals, 0);
+    }
+
+    #[test]
+    fn brent_alone_finds_a_steep_root() {
+        let mut f = |t: f64| {
+            (
+                (20.0 * (t - 0.123)).tanh(),
+                20.0 / (20.0 * (t - 0.123)).cosh().powi(2),
+            )
+        };
+        let (lo, hi) = (sample(&mut f, 0.0), sample(&mut f, 1.0));
+        let mut c = Counted::new(&mut f);
+        let r = brent(&mut c, lo, hi, 1e-13).unwrap();
+        assert!((r - 0.123).abs() < 1e-12);
+    }
+}
