@@ -1,25 +1,8 @@
-//! G. Paul's bounded priority queue (J. Comput. Phys. 221, 615, 2007): O(1) per event.
-//!
-//! Time is cut into buckets of width Δ. A window of `n` buckets starting at `start` holds
-//! unsorted lists; only the bucket being consumed is fine-sorted, in a small binary heap (Paul's
-//! "binary tree"). Events beyond the window wait, unsorted, in an overflow list. When the window
-//! is used up, the next one starts at the earliest overflow event and the overflow is dealt out
-//! again (the wrap-around). A push is one multiply and one vector push; a pop is a pop from a
-//! heap of a few events; the bucket scan and the redistribution are paid once per window and
-//! amortise to O(1) per event when the window holds a fair share of the queue.
-//!
-//! **Tuning.** With [`Tuning::Auto`] (the default) Δ and `n` are chosen afresh at every
-//! wrap-around from the events then waiting, all of which sit in the overflow: Δ so that the
-//! earliest quarter of them falls about [`DEFAULT_EVENTS_PER_BUCKET`] to a bucket (Paul sizes Δ by
-//! the population of the tree), and `n` so that the window reaches several times as far as those
-//! events (Paul sizes `n` by how far ahead of the last pop new events land). Both adapt as the
-//! simulation's event rate or queue size changes. [`Tuning::Fixed`] pins them, as in the paper.
-//!
-//! Events at `+∞` wait in a list of their own and pop, first in first out, once no finite event
-//! is left; events at `−∞`, or earlier than the bucket being consumed, go straight to the heap.
-//!
-//! **Order.** Which bucket an event goes to is a monotone function of its time, so the queue pops
-//! in exactly the same order as [`HeapQueue`](crate::HeapQueue), ties included.
+//! G. Paul's bounded priority queue (J. Comput. Phys. 221, 615, 2007); the user-facing
+//! description is on [`BoundedQueue`]. Internals: `place` decides where an entry goes from one
+//! float index, monotone in time; `advance` refills the heap from the next bucket, dealing out
+//! the next block or wrapping around; `retune` and `respread` keep the layout fitted to the
+//! events.
 
 use crate::heap::MinHeap;
 use crate::order::Entry;
@@ -164,7 +147,38 @@ impl<P> ChunkList<P> {
     }
 }
 
-/// G. Paul's O(1) priority queue of timed events; see the [module docs](self).
+/// G. Paul's bounded priority queue of timed events (J. Comput. Phys. 221, 615, 2007): O(1)
+/// per event.
+///
+/// Time is cut into buckets of width Δ. A window of buckets holds unsorted lists; only the
+/// bucket being consumed is fine-sorted, in a small binary heap (Paul's "binary tree"). Events
+/// beyond the window wait, unsorted, in an overflow list. When the window is used up, the next
+/// one starts at the earliest overflow event and the overflow is dealt out again (the
+/// wrap-around). A push is a multiply and a vector push; a pop is a pop from a heap of a few
+/// events; the bucket scans and redistributions are paid once per window and amortise to O(1)
+/// per event.
+///
+/// Beyond the paper, the window is split into blocks of at most 4096 buckets. Only the block
+/// being consumed has its buckets; each later block is one list, kept in fixed-size chunks and
+/// dealt into the buckets when the block is reached. The live buckets then stay in a core's L2
+/// cache at millions of events, and a long window (so rare wrap-arounds) costs one list per
+/// block.
+///
+/// **Tuning.** With [`Tuning::Auto`] (the default) Δ and the bucket count are chosen afresh at
+/// every wrap-around from a sample of the waiting events: Δ so that the earliest quarter of them
+/// falls about [`DEFAULT_EVENTS_PER_BUCKET`] to a bucket (Paul sizes Δ by the population of the
+/// tree), the count so that the window reaches several times as far (Paul sizes it by how far
+/// ahead of the last pop new events land). A bucket that arrives far more crowded than intended
+/// triggers an immediate re-spread of all events, at most once per `len/2` operations, so the
+/// layout follows a queue that grows or whose event rate changes. [`Tuning::Fixed`] pins both,
+/// as in the paper, for events within a bounded horizon.
+///
+/// **Order.** Which bucket an event goes to is a monotone function of its time, so the queue pops
+/// in exactly the same order as [`HeapQueue`](crate::HeapQueue), ties included. Events at `+∞`
+/// wait in a list of their own and pop, first in first out, once no finite event is left; events
+/// at `−∞`, or earlier than the bucket being consumed, go straight to the heap.
+///
+/// [`BoundedQueue::stats`] and [`BoundedQueue::layout`] show how the queue has been working.
 ///
 /// ```
 /// use event_queue::{BoundedQueue, EventQueue};

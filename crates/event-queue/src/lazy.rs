@@ -1,12 +1,4 @@
-//! A queue with lazy invalidation: what an event loop drives.
-//!
-//! [`LazyQueue`] owns a queue and a [`StampBook`]. Events are scheduled with the ticket of
-//! their participants; [`LazyQueue::invalidate`] makes all pending events of a participant stale
-//! in O(1); [`LazyQueue::pop`] returns the earliest event that is still current, dropping stale
-//! ones on the way. Stale events are removed in bulk ("swept") only when the queue has grown to
-//! [`Cleanup::growth`] times its size after the previous sweep, which costs O(1) amortised per
-//! event and keeps memory bounded (seed 003 §V.A: "a relatively fast and infrequent cleanup of
-//! invalid events from the lists").
+//! [`LazyQueue`]: a queue and a stamp book together, the way an event loop drives them.
 
 use crate::{Event, EventQueue, ParticipantId, QueueError, StampBook, Stamped};
 
@@ -49,6 +41,14 @@ pub struct LazyStats {
 }
 
 /// An event queue with lazy invalidation by generation stamps.
+///
+/// `LazyQueue` owns a queue and a [`StampBook`]. Events are scheduled with the ticket of their
+/// participants; [`LazyQueue::invalidate`] makes all pending events of a participant stale in
+/// O(1); [`LazyQueue::pop`] returns the earliest event that is still current, dropping stale ones
+/// on the way. Stale events are removed in bulk ("swept") only when the queue has grown to
+/// [`Cleanup::growth`] times its size after the previous sweep, which costs O(1) amortised per
+/// event and keeps memory bounded (seed 003 §V.A: "a relatively fast and infrequent cleanup of
+/// invalid events from the lists").
 ///
 /// This is how a simulator drives the crate: one participant per body, events carrying a
 /// [`Ticket`](crate::Ticket), invalidate on every change, pop the next current event.

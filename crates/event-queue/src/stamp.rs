@@ -1,18 +1,4 @@
-//! Generation stamps: lazy invalidation without searching the queue.
-//!
-//! Every participant (a body, a cell, a machine …) has a generation counter. An event records
-//! the counters of its participants when it is scheduled, in a [`Ticket`]. Whenever something
-//! happens to a participant that makes its pending events obsolete, the simulator calls
-//! [`StampBook::invalidate`], which bumps the counter. A popped event whose ticket no longer
-//! matches the book is stale and is simply dropped. Nothing ever has to find an event inside the
-//! queue to cancel it (seed 003 §V.A measured this at ~15 % less total run time).
-//!
-//! The scheme needs no queue: a [`StampBook`] and [`Ticket`]s work with any container.
-//!
-//! Counters are `u32` and wrap. A stale ticket could only be mistaken for a current one if its
-//! participant were invalidated a multiple of 2³² times while the ticket waited in the queue.
-//! [`LazyQueue`](crate::LazyQueue) rules that out by sweeping stale events at least once every
-//! 2³¹ invalidations; users of a bare `StampBook` get [`StampBook::invalidations`] to do the same.
+//! Generation stamps for lazy invalidation; the user-facing description is on [`StampBook`].
 
 /// The generation of one participant at some moment.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -21,7 +7,22 @@ pub struct Stamp(u32);
 /// Index of a participant in a [`StampBook`].
 pub type ParticipantId = u32;
 
-/// One generation counter per participant.
+/// One generation counter per participant: lazy invalidation without searching the queue.
+///
+/// Every participant (a body, a cell, a machine …) has a generation counter. An event records
+/// the counters of its participants when it is scheduled, in a [`Ticket`]. Whenever something
+/// happens to a participant that makes its pending events obsolete, the simulator calls
+/// [`StampBook::invalidate`], which bumps the counter. A popped event whose ticket no longer
+/// matches the book is stale and is simply dropped. Nothing ever has to find an event inside the
+/// queue to cancel it (seed 003 §V.A measured this at ~15 % less total run time).
+///
+/// The scheme needs no queue: a `StampBook` and [`Ticket`]s work with any container;
+/// [`LazyQueue`](crate::LazyQueue) is the ready-made combination.
+///
+/// Counters are `u32` and wrap. A stale ticket could only be mistaken for a current one if its
+/// participant were invalidated a multiple of 2³² times while the ticket waited in the queue.
+/// `LazyQueue` rules that out by sweeping stale events at least once every 2³¹ invalidations;
+/// users of a bare `StampBook` get [`StampBook::invalidations`] to do the same.
 #[derive(Clone, Debug, Default)]
 pub struct StampBook {
     stamps: Vec<u32>,
