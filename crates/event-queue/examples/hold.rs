@@ -15,7 +15,7 @@ use std::time::Instant;
 use event_queue::hold::{Hold, Increment, StdHeap};
 use event_queue::{BoundedQueue, EventQueue, HeapQueue};
 
-struct Args {
+pub(crate) struct Args {
     size: usize,
     holds: u64,
     dist: Increment,
@@ -23,7 +23,8 @@ struct Args {
     seed: u64,
 }
 
-fn parse() -> Result<Args, String> {
+/// Parses the command line (without the program name).
+pub(crate) fn parse(args: &[String]) -> Result<Args, String> {
     let mut a = Args {
         size: 100_000,
         holds: 2_000_000,
@@ -31,7 +32,7 @@ fn parse() -> Result<Args, String> {
         reps: 3,
         seed: 1,
     };
-    let mut it = std::env::args().skip(1);
+    let mut it = args.iter().cloned();
     while let Some(flag) = it.next() {
         let mut value = || it.next().ok_or(format!("`{flag}` needs a value"));
         match flag.as_str() {
@@ -80,14 +81,9 @@ fn median(mut v: Vec<f64>) -> f64 {
     v[v.len() / 2]
 }
 
-fn main() -> ExitCode {
-    let a = match parse() {
-        Ok(a) => a,
-        Err(e) => {
-            eprintln!("hold: {e}");
-            return ExitCode::from(2);
-        }
-    };
+/// Runs the benchmark and returns the table: a `#` header line, then one line per queue ending
+/// with its holds per second relative to `std::collections::BinaryHeap`.
+pub(crate) fn report(a: &Args) -> Result<String, String> {
     let names = [
         "std BinaryHeap",
         "HeapQueue (binary heap)",
@@ -98,30 +94,46 @@ fn main() -> ExitCode {
     for _ in 0..a.reps {
         for (i, r) in rates.iter_mut().enumerate() {
             let (rate, sum) = match i {
-                0 => measure(StdHeap::new(), &a),
-                1 => measure(HeapQueue::new(), &a),
-                _ => measure(BoundedQueue::new(), &a),
+                0 => measure(StdHeap::new(), a),
+                1 => measure(HeapQueue::new(), a),
+                _ => measure(BoundedQueue::new(), a),
             };
             r.push(rate);
             sums[i] = sum;
         }
     }
     if sums.iter().any(|&s| s != sums[0]) {
-        eprintln!("hold: the queues disagree on the popped times: {sums:?}");
-        return ExitCode::FAILURE;
+        return Err(format!("the queues disagree on the popped times: {sums:?}"));
     }
     let dist = match a.dist {
         Increment::Exponential => "exp",
         Increment::Uniform => "uniform",
     };
-    println!(
-        "# hold model: size {} holds {} dist {dist}, median of {} rounds; last column: holds/s relative to std BinaryHeap",
+    let mut out = format!(
+        "# hold model: size {} holds {} dist {dist}, median of {} rounds; last column: holds/s relative to std BinaryHeap\n",
         a.size, a.holds, a.reps
     );
     let base = median(rates[0].clone());
     for (name, r) in names.iter().zip(rates) {
         let m = median(r);
-        println!("{name:<36} {m:>14.0} holds/s  {:>6.2}", m / base);
+        out.push_str(&format!(
+            "{name:<36} {m:>14.0} holds/s  {:>6.2}\n",
+            m / base
+        ));
     }
-    ExitCode::SUCCESS
+    Ok(out)
+}
+
+fn main() -> ExitCode {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    match parse(&args).and_then(|a| report(&a)) {
+        Ok(table) => {
+            print!("{table}");
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("hold: {e}");
+            ExitCode::from(2)
+        }
+    }
 }
