@@ -32,7 +32,7 @@
 //! `∂U/∂r = U_R − (a G_a + b G_b)/r`, `∂U/∂x_i = G_a/r`, `∂U/∂x_j = G_b/r`, `∂U/∂c = G_c`.
 
 use crate::error::{non_negative, positive};
-use crate::pair::{Invariants, Partials, assemble};
+use crate::pair::{Invariants, Partials, assemble, overlap};
 use crate::{PairEval, PairGeometry, PairPotential, PotentialError};
 
 /// An exponent stored so that the common integer values cost a multiplication, not a `powf`.
@@ -171,60 +171,71 @@ impl GayBerne {
     /// `ε(r̂, s_i, s_j)` for `a = r̂·s_i`, `b = r̂·s_j`, `c = s_i·s_j`.
     #[inline]
     pub fn contact_and_depth(&self, a: f64, b: f64, c: f64) -> (f64, f64) {
-        let (sp2, sm2) = ((a + b) * (a + b), (a - b) * (a - b));
-        let h = sp2 / (1.0 + self.chi * c) + sm2 / (1.0 - self.chi * c);
-        let hp = sp2 / (1.0 + self.chi_prime * c) + sm2 / (1.0 - self.chi_prime * c);
-        let sigma = self.sigma0 / (1.0 - 0.5 * self.chi * h).sqrt();
-        let e1 = 1.0 / (1.0 - self.chi * self.chi * c * c).sqrt();
-        let e2 = 1.0 - 0.5 * self.chi_prime * hp;
-        (
-            sigma,
-            self.epsilon0 * self.pow_nu.pow(e1) * self.pow_mu.pow(e2),
-        )
+        let t = self.shape_terms(a, b, c);
+        (t.sigma, t.eps)
+    }
+
+    /// The orientation-dependent factors, computed one way for the energy and the derivatives
+    /// alike, so that `energy` and `evaluate` agree bit for bit.
+    #[inline]
+    fn shape_terms(&self, a: f64, b: f64, c: f64) -> Shape {
+        let (chi, chp) = (self.chi, self.chi_prime);
+        let (sp, sm) = (a + b, a - b);
+        let (psp, psm) = (sp / (1.0 + chi * c), sm / (1.0 - chi * c));
+        let (psp_p, psm_p) = (sp / (1.0 + chp * c), sm / (1.0 - chp * c));
+        let h = sp * psp + sm * psm;
+        let hp = sp * psp_p + sm * psm_p;
+        let q = 1.0 - 0.5 * chi * h;
+        let w1 = 1.0 - chi * chi * c * c;
+        let e2 = 1.0 - 0.5 * chp * hp;
+        Shape {
+            psp,
+            psm,
+            psp_p,
+            psm_p,
+            q,
+            w1,
+            e2,
+            sigma: self.sigma0 / q.sqrt(),
+            eps: self.epsilon0 * self.pow_nu.pow(1.0 / w1.sqrt()) * self.pow_mu.pow(e2),
+        }
+    }
+
+    /// `(U, ρ⁶, R, shape)` from the invariants; `None` where `U` is infinite.
+    #[inline]
+    fn energy_terms(&self, inv: &Invariants) -> Option<(f64, f64, f64, Shape)> {
+        let r = inv.r;
+        if r.is_nan() || r <= 0.0 {
+            return None;
+        }
+        let t = self.shape_terms(inv.x_i / r, inv.x_j / r, inv.c);
+        let big_r = r - t.sigma + self.sigma0;
+        if big_r.is_nan() || big_r <= 0.0 {
+            return None;
+        }
+        let rho = self.sigma0 / big_r;
+        let rho2 = rho * rho;
+        let rho6 = rho2 * rho2 * rho2;
+        Some((4.0 * t.eps * rho6 * (rho6 - 1.0), rho6, big_r, t))
     }
 
     /// `U` and its [`Partials`] from the invariants; `None` where `U` is infinite.
     #[inline]
     fn partials(&self, inv: &Invariants) -> Option<Partials> {
+        let (energy, rho6, big_r, t) = self.energy_terms(inv)?;
         let r = inv.r;
-        if r.is_nan() || r <= 0.0 {
-            return None;
-        }
         let (a, b, c) = (inv.x_i / r, inv.x_j / r, inv.c);
         let (chi, chp) = (self.chi, self.chi_prime);
-        let (sp, sm) = (a + b, a - b);
-        let (dp, dm) = (1.0 / (1.0 + chi * c), 1.0 / (1.0 - chi * c));
-        let (dpp, dmp) = (1.0 / (1.0 + chp * c), 1.0 / (1.0 - chp * c));
-        let (psp, psm) = (sp * dp, sm * dm);
-        let (psp_p, psm_p) = (sp * dpp, sm * dmp);
-        let h = sp * psp + sm * psm;
-        let hp = sp * psp_p + sm * psm_p;
-        let q = 1.0 - 0.5 * chi * h;
-        let sigma = self.sigma0 / q.sqrt();
-        let big_r = r - sigma + self.sigma0;
-        if big_r.is_nan() || big_r <= 0.0 {
-            return None;
-        }
-        let w1 = 1.0 - chi * chi * c * c;
-        let e1 = 1.0 / w1.sqrt();
-        let e2 = 1.0 - 0.5 * chp * hp;
-        let eps = self.epsilon0 * self.pow_nu.pow(e1) * self.pow_mu.pow(e2);
-        let rho = self.sigma0 / big_r;
-        let rho2 = rho * rho;
-        let rho6 = rho2 * rho2 * rho2;
-        let four_eps = 4.0 * eps;
-        let energy = four_eps * rho6 * (rho6 - 1.0);
-        let u_big_r = -6.0 * four_eps * rho6 * (2.0 * rho6 - 1.0) / big_r;
-
+        let u_big_r = -24.0 * t.eps * rho6 * (2.0 * rho6 - 1.0) / big_r;
         // ∂H/∂(a, b, c) for χ and χ'.
-        let (h_a, h_b) = (2.0 * (psp + psm), 2.0 * (psp - psm));
-        let h_c = chi * (psm * psm - psp * psp);
-        let (hp_a, hp_b) = (2.0 * (psp_p + psm_p), 2.0 * (psp_p - psm_p));
-        let hp_c = chp * (psm_p * psm_p - psp_p * psp_p);
-        // ∂σ/∂H and ∂ln ε/∂H'.
-        let dsigma = 0.25 * chi * sigma / q;
-        let dlne = -0.5 * self.mu * chp / e2;
-        let dlne_c = self.nu * chi * chi * c / w1;
+        let (h_a, h_b) = (2.0 * (t.psp + t.psm), 2.0 * (t.psp - t.psm));
+        let h_c = chi * (t.psm * t.psm - t.psp * t.psp);
+        let (hp_a, hp_b) = (2.0 * (t.psp_p + t.psm_p), 2.0 * (t.psp_p - t.psm_p));
+        let hp_c = chp * (t.psm_p * t.psm_p - t.psp_p * t.psp_p);
+        // ∂σ/∂H and ∂ln ε/∂H', ∂ln ε₁^ν/∂c.
+        let dsigma = 0.25 * chi * t.sigma / t.q;
+        let dlne = -0.5 * self.mu * chp / t.e2;
+        let dlne_c = self.nu * chi * chi * c / t.w1;
         let g_a = energy * dlne * hp_a - u_big_r * dsigma * h_a;
         let g_b = energy * dlne * hp_b - u_big_r * dsigma * h_b;
         let g_c = energy * (dlne * hp_c + dlne_c) - u_big_r * dsigma * h_c;
@@ -238,23 +249,27 @@ impl GayBerne {
     }
 }
 
+/// The orientation-dependent intermediate results of the Gay–Berne potential.
+#[derive(Clone, Copy, Debug)]
+struct Shape {
+    /// `(a + b)/(1 + χc)`, `(a − b)/(1 − χc)` and the same with `χ'`.
+    psp: f64,
+    psm: f64,
+    psp_p: f64,
+    psm_p: f64,
+    /// `1 − χH/2`, `1 − χ²c²`, `ε₂`.
+    q: f64,
+    w1: f64,
+    e2: f64,
+    sigma: f64,
+    eps: f64,
+}
+
 impl PairPotential for GayBerne {
     #[inline]
     fn energy(&self, g: &PairGeometry) -> f64 {
-        let inv = g.invariants();
-        if inv.r.is_nan() || inv.r <= 0.0 {
-            return f64::INFINITY;
-        }
-        let (a, b) = (inv.x_i / inv.r, inv.x_j / inv.r);
-        let (sigma, eps) = self.contact_and_depth(a, b, inv.c);
-        let big_r = inv.r - sigma + self.sigma0;
-        if big_r.is_nan() || big_r <= 0.0 {
-            return f64::INFINITY;
-        }
-        let rho = self.sigma0 / big_r;
-        let rho2 = rho * rho;
-        let rho6 = rho2 * rho2 * rho2;
-        4.0 * eps * rho6 * (rho6 - 1.0)
+        self.energy_terms(&g.invariants())
+            .map_or(f64::INFINITY, |(u, ..)| u)
     }
 
     #[inline]
@@ -262,10 +277,11 @@ impl PairPotential for GayBerne {
         let inv = g.invariants();
         match self.partials(&inv) {
             Some(p) => assemble(g, &inv, &p),
-            None => Err(PotentialError::Overlap {
-                r: inv.r,
-                what: "r - sigma(orientation) + sigma0 <= 0 or r = 0",
-            }),
+            None => Err(overlap(
+                g,
+                inv.r,
+                "r - sigma(orientation) + sigma0 <= 0 or r = 0",
+            )),
         }
     }
 

@@ -3,6 +3,7 @@
 use glam::DVec3;
 
 use crate::error::positive;
+use crate::pair::overlap;
 use crate::{PairEval, PairGeometry, PairPotential, PotentialError};
 
 /// The 12-6 Lennard-Jones potential `U = 4ε[(σ/r)¹² − (σ/r)⁶]` between spheres (003 Eq. 22
@@ -120,10 +121,7 @@ impl PairPotential for LennardJones {
         if energy.is_finite() && force.is_finite() {
             Ok(out)
         } else {
-            Err(PotentialError::Overlap {
-                r: r2.sqrt(),
-                what: "(sigma/r)^12 overflows binary64",
-            })
+            Err(overlap(g, r2.sqrt(), "(sigma/r)^12 overflows binary64"))
         }
     }
 

@@ -186,10 +186,23 @@ pub fn assemble(
     if out.is_finite() {
         Ok(out)
     } else {
-        Err(PotentialError::Overlap {
-            r: inv.r,
-            what: "the energy or its derivatives overflow binary64",
-        })
+        Err(overlap(
+            g,
+            inv.r,
+            "the energy or its derivatives overflow binary64",
+        ))
+    }
+}
+
+/// The error for a geometry without finite force: [`PotentialError::NotFinite`] if the input
+/// itself is not finite (NaN in, error out), [`PotentialError::Overlap`] otherwise. Only on
+/// the error path, so the checks cost nothing in the common case.
+#[cold]
+pub(crate) fn overlap(g: &PairGeometry, r: f64, what: &'static str) -> PotentialError {
+    if g.r_ij.is_finite() && g.s_i.is_finite() && g.s_j.is_finite() {
+        PotentialError::Overlap { r, what }
+    } else {
+        PotentialError::NotFinite("pair geometry (r_ij, s_i or s_j)")
     }
 }
 
@@ -204,8 +217,10 @@ pub fn assemble(
 ///   coinciding, an effective distance `≤ 0`), never NaN for finite input;
 /// - `evaluate` returns the same energy with force and torques consistent with it (003 Eqs.
 ///   4–5; [`assemble`] does the vector algebra), or [`PotentialError::Overlap`] where the
-///   energy is infinite or overflows;
-/// - the potential decays to zero at large distance, so far-apart pairs carry no energy.
+///   energy is infinite or it or a derivative overflows binary64 (only deep inside the core);
+/// - the potential decays to zero at large distance, so far-apart pairs carry no energy;
+/// - a NaN or infinity in the geometry is the caller's bug: `energy` passes the NaN on and
+///   `evaluate` returns [`PotentialError::NotFinite`].
 pub trait PairPotential {
     /// `U_ij` for this geometry; `+∞` for overlapping bodies.
     fn energy(&self, g: &PairGeometry) -> f64;
@@ -213,7 +228,8 @@ pub trait PairPotential {
     /// Energy, force on `i` and torques on `i` and `j`.
     ///
     /// # Errors
-    /// [`PotentialError::Overlap`] where the energy is infinite or overflows.
+    /// [`PotentialError::Overlap`] where the energy is infinite or it or a derivative
+    /// overflows; [`PotentialError::NotFinite`] for a non-finite geometry.
     fn evaluate(&self, g: &PairGeometry) -> Result<PairEval, PotentialError>;
 
     /// The global minimum of `U` over all distances and orientations (a negative number for a

@@ -2,6 +2,7 @@
 
 use crate::error::{non_negative, positive};
 use crate::lennard_jones::{energy_and_virial, energy_from_s2, lj_reach};
+use crate::pair::overlap;
 use crate::{PairEval, PairGeometry, PairPotential, PotentialError};
 
 /// Rods interacting through a Lennard-Jones potential of an orientation-dependent effective
@@ -31,6 +32,7 @@ pub struct LjRod {
     sigma: f64,
     zeta: f64,
     four_eps: f64,
+    sigma2: f64,
 }
 
 impl LjRod {
@@ -49,6 +51,7 @@ impl LjRod {
             sigma,
             zeta,
             four_eps: 4.0 * epsilon,
+            sigma2: sigma * sigma,
         })
     }
 
@@ -60,6 +63,7 @@ impl LjRod {
             sigma: 3.035,
             zeta: 1.0,
             four_eps: 12.0,
+            sigma2: 3.035 * 3.035,
         }
     }
 
@@ -90,8 +94,7 @@ impl LjRod {
     #[inline]
     pub fn energy_of_effective(&self, r_e: f64) -> f64 {
         if r_e > 0.0 {
-            let s = self.sigma / r_e;
-            energy_from_s2(self.four_eps, s * s)
+            energy_from_s2(self.four_eps, self.sigma2 / (r_e * r_e))
         } else {
             f64::INFINITY
         }
@@ -117,28 +120,40 @@ impl LjRod {
 impl PairPotential for LjRod {
     #[inline]
     fn energy(&self, g: &PairGeometry) -> f64 {
-        let r = g.r_ij.length();
-        if r == 0.0 {
+        let r2 = g.r_ij.length_squared();
+        if r2 == 0.0 {
             return f64::INFINITY;
         }
-        self.energy_of_effective(self.effective_distance(r, g.s_i.dot(g.s_j)))
+        if self.zeta == 0.0 {
+            // r_e = r: the Lennard-Jones arithmetic from r², bit for bit.
+            return energy_from_s2(self.four_eps, self.sigma2 / r2);
+        }
+        self.energy_of_effective(self.effective_distance(r2.sqrt(), g.s_i.dot(g.s_j)))
     }
 
     #[inline]
     fn evaluate(&self, g: &PairGeometry) -> Result<PairEval, PotentialError> {
-        let r = g.r_ij.length();
+        let r2 = g.r_ij.length_squared();
+        let r = r2.sqrt();
         let c = g.s_i.dot(g.s_j);
         let r_e = self.effective_distance(r, c);
         if !(r > 0.0 && r_e > 0.0) {
-            return Err(PotentialError::Overlap {
+            return Err(overlap(
+                g,
                 r,
-                what: "effective distance r_e = r + zeta (1/2 - c^2) <= 0 or r = 0",
-            });
+                "effective distance r_e = r + zeta (1/2 - c^2) <= 0 or r = 0",
+            ));
         }
-        let s = self.sigma / r_e;
-        let (energy, virial) = energy_and_virial(self.four_eps, s * s);
-        let du = virial / r_e; // dU/dr_e (003 Eq. 24)
-        let force = (-du / r) * g.r_ij;
+        // r_e² and r_e r; for ζ = 0 (r_e = r) exactly r², so that the arithmetic is that of
+        // LennardJones bit for bit.
+        let (re2, re_r) = if self.zeta == 0.0 {
+            (r2, r2)
+        } else {
+            (r_e * r_e, r_e * r)
+        };
+        let (energy, virial) = energy_and_virial(self.four_eps, self.sigma2 / re2);
+        let force = (-virial / re_r) * g.r_ij; // −dU/dr_e r̂ (003 Eq. 24)
+        let du = virial / r_e; // dU/dr_e
         let torque_i = (2.0 * self.zeta * c * du) * g.s_i.cross(g.s_j);
         let out = PairEval {
             energy,
@@ -149,10 +164,7 @@ impl PairPotential for LjRod {
         if out.is_finite() {
             Ok(out)
         } else {
-            Err(PotentialError::Overlap {
-                r,
-                what: "(sigma/r_e)^12 overflows binary64",
-            })
+            Err(overlap(g, r, "(sigma/r_e)^12 overflows binary64"))
         }
     }
 
