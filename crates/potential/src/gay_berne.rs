@@ -41,6 +41,7 @@ enum Exponent {
     Zero,
     One,
     Two,
+    Int(i32),
     Real(f64),
 }
 
@@ -50,6 +51,7 @@ impl Exponent {
             0.0 => Self::Zero,
             1.0 => Self::One,
             2.0 => Self::Two,
+            _ if p.fract() == 0.0 && p.abs() <= 64.0 => Self::Int(p as i32),
             _ => Self::Real(p),
         }
     }
@@ -60,6 +62,7 @@ impl Exponent {
             Self::Zero => 1.0,
             Self::One => x,
             Self::Two => x * x,
+            Self::Int(n) => x.powi(n),
             Self::Real(p) => x.powf(p),
         }
     }

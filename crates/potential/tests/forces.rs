@@ -63,7 +63,7 @@ fn torque_about_a_random_axis_is_minus_the_rotation_derivative() {
         for _ in 0..100 {
             let g = draw(case, &mut r);
             let Ok(e) = p.evaluate(&g) else { continue };
-            let floor = FD_FLOOR * (e.energy.abs() + p.minimum().abs());
+            let floor = FD_FLOOR * round_off_scale(p, &g, &e);
             for (body, tau) in [(0, e.torque_i), (1, e.torque_j)] {
                 let n = unit(&mut r);
                 let du = derivative(|a| p.energy(&turned(&g, body, n, a)), FD_STEP);
@@ -187,7 +187,7 @@ fn energy_rate_matches_the_derivative_along_a_moving_rotating_pair() {
             let scale = e.force.length() * v.length()
                 + e.torque_i.length() * wi.length()
                 + e.torque_j.length() * wj.length();
-            let floor = FD_FLOOR * (e.energy.abs() + p.minimum().abs());
+            let floor = FD_FLOOR * round_off_scale(p, &g, &e);
             let err = (rate - fd).abs() / scale.max(floor);
             assert!(err < 1e-7, "{}: U̇ {rate} vs {fd} ({err:e})", case.name);
         }

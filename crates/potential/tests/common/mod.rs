@@ -195,9 +195,11 @@ impl FdErrors {
 
 /// Finite-difference step, relative to the length scale.
 pub const FD_STEP: f64 = 1e-4;
-/// Floors of the relative errors, relative to `(|U| + |U_min|)` (and a length scale for the
-/// force): an analytic value below them is compared absolutely, since finite differences of
-/// `U` carry an absolute error of order `ε_mach |U| / h`.
+/// Floors of the relative errors, relative to the round-off scale of `U`,
+/// `|U| + r|F| + |U_min|` (`U` is computed from `r` and the axes with relative round-off `ε`,
+/// so it carries an absolute error of order `ε(|U| + r|dU/dr|)`), and divided by a length
+/// scale for the force. Finite differences of `U` carry that error divided by the step: an
+/// analytic value below the floor is compared absolutely.
 pub const FD_FLOOR: f64 = 1e-4;
 
 /// Errors of one geometry; `None` if it is in an overlap (no finite force).
@@ -205,7 +207,7 @@ pub fn fd_errors(p: &dyn PairPotential, g: &PairGeometry) -> Option<FdErrors> {
     let e = p.evaluate(g).ok()?;
     let l = p.length_scale();
     let h = FD_STEP * l;
-    let scale = e.energy.abs() + p.minimum().abs();
+    let scale = round_off_scale(p, g, &e);
     let (ff, tf) = (FD_FLOOR * scale / l, FD_FLOOR * scale);
     Some(FdErrors {
         force: rel(e.force, fd_force(p, g, h), ff),
@@ -213,6 +215,11 @@ pub fn fd_errors(p: &dyn PairPotential, g: &PairGeometry) -> Option<FdErrors> {
         torque_j: rel(e.torque_j, fd_torque(p, g, 1, FD_STEP), tf),
         balance: e.torque_imbalance(g.r_ij),
     })
+}
+
+/// `|U| + r|F| + |U_min|`: the scale of the absolute round-off of `U` (see [`FD_FLOOR`]).
+pub fn round_off_scale(p: &dyn PairPotential, g: &PairGeometry, e: &potential::PairEval) -> f64 {
+    e.energy.abs() + g.r_ij.length() * e.force.length() + p.minimum().abs()
 }
 
 /// Whether `g` lies within `margin` of a switching knot.
