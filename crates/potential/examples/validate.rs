@@ -485,37 +485,62 @@ fn time_per_call(
     times[reps / 2]
 }
 
+/// `(energy, evaluate)` ns per call, static dispatch on the concrete type.
+fn timings<P: PairPotential>(p: &P, geoms: &[PairGeometry], reps: usize) -> (f64, f64) {
+    let e = time_per_call(geoms, reps, |g| p.energy(g));
+    let f = time_per_call(geoms, reps, |g| {
+        p.evaluate(g).map_or(0.0, |e| e.force.x + e.torque_i.y)
+    });
+    (e, f)
+}
+
 fn timing_section(rep: &mut Report, quick: bool) {
     let reps = if quick { 5 } else { 31 };
     rep.line("### Cost of one evaluation\n");
     rep.line(format!(
-        "Release build, 4096 random geometries per potential (as for the finite differences) cycled \
-         {reps} times, median ns per call; a noisy shared 2-core machine, so read the ratios to \
-         the Lennard-Jones baseline measured in the same run. Reported, never checked; criterion \
+        "Release build, static dispatch on the concrete types (as the engines call them), 4096 \
+         random geometries per potential drawn as for the finite differences and cycled {reps} \
+         times, median ns per call; a noisy shared 2-core machine, so read the ratios to the \
+         Lennard-Jones baseline measured in the same run. Reported, never checked; criterion \
          medians are in docs/PERFORMANCE.md.\n"
     ));
     rep.line("| potential | energy (ns) | energy, force, torques (ns) | evaluate / LJ evaluate |");
     rep.line("|---|---:|---:|---:|");
-    let mut base = None;
-    for (c, case) in cases().iter().enumerate() {
+    let cases = cases();
+    let geoms = |c: usize| -> Vec<PairGeometry> {
         let mut r = rng(77_000 + c as u64);
-        let geoms: Vec<PairGeometry> = (0..4096).map(|_| draw(case, &mut r)).collect();
-        let p = case.potential.as_ref();
-        let e = time_per_call(&geoms, reps, |g| p.energy(g));
-        let f = time_per_call(&geoms, reps, |g| {
-            p.evaluate(g).map_or(0.0, |e| e.force.x + e.torque_i.y)
-        });
-        let b = *base.get_or_insert(f);
+        (0..4096).map(|_| draw(&cases[c], &mut r)).collect()
+    };
+    let rod = LjRod::new(1.0, 1.0, 0.33).unwrap();
+    let paper = LjRod::paper();
+    let oblate = GayBerne::new(1.0, 1.0, 0.5, 0.2, 1.0, 3.0).unwrap();
+    // The same potentials, in the order of `cases()`.
+    let rows = [
+        timings(&LennardJones::new(1.0, 1.0).unwrap(), &geoms(0), reps),
+        timings(&rod, &geoms(1), reps),
+        timings(&paper, &geoms(2), reps),
+        timings(&GayBerne::default(), &geoms(3), reps),
+        timings(&oblate, &geoms(4), reps),
+        timings(
+            &potential::Smoothed::paper(paper, paper.sigma()).unwrap(),
+            &geoms(5),
+            reps,
+        ),
+        timings(
+            &potential::Smoothed::new(GayBerne::default(), 3.5, 4.5).unwrap(),
+            &geoms(6),
+            reps,
+        ),
+    ];
+    let base = rows[0].1;
+    for (case, (e, f)) in cases.iter().zip(rows) {
         rep.line(format!(
             "| {} | {e:.1} | {f:.1} | {:.2} |",
             case.name,
-            f / b
+            f / base
         ));
     }
-    rep.line(
-        "\n(Through `&dyn PairPotential`, as the table's loop needs; the engines call concrete \
-         types, so these include one indirect call each.)\n",
-    );
+    rep.line("");
 }
 
 fn main() -> ExitCode {

@@ -73,3 +73,8 @@ pub use terrace::{
     Bounds, DEFAULT_CORE_DEPTHS, DEFAULT_MINIMUM_TOLERANCE, LevelSet, MAX_LEVELS, NearMinimum,
     Steps, TerraceMap, TerraceOptions,
 };
+
+/// The README's example, compiled and run as a doctest so it cannot go stale.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;

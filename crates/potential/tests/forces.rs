@@ -229,3 +229,48 @@ fn rods_with_zero_zeta_are_lennard_jones_to_the_last_bit() {
     }
     assert_eq!(rod.reach(-0.3).unwrap(), lj.reach(-0.3).unwrap());
 }
+
+#[test]
+fn smoothed_energy_and_force_are_continuous_at_both_knots() {
+    // 003 Eq. 26: g and g' are continuous at r_l and r_u, so U and F are. Across a knot at
+    // distance δ the jump must be O(δ) (here δ = 1e-9 of the knot), not O(1).
+    let rod = LjRod::paper();
+    let smooth_rod = potential::Smoothed::paper(rod, rod.sigma()).unwrap();
+    let smooth_gb = potential::Smoothed::new(potential::GayBerne::default(), 3.5, 4.5).unwrap();
+    let gb = potential::GayBerne::default();
+    let list: [(&dyn PairPotential, &dyn PairPotential, [f64; 2]); 2] = [
+        (&smooth_rod, &rod, [2.5 * rod.sigma(), 3.0 * rod.sigma()]),
+        (&smooth_gb, &gb, [3.5, 4.5]),
+    ];
+    let mut r = rng(8);
+    for (p, inner, knots) in list {
+        for _ in 0..200 {
+            let (n, si, sj) = (unit(&mut r), unit(&mut r), unit(&mut r));
+            for k in knots {
+                let d = 1e-9 * k;
+                let at = |x: f64| p.evaluate(&PairGeometry::new(n * x, si, sj)).unwrap();
+                let (a, b) = (at(k - d), at(k + d));
+                // Scales from the unsmoothed potential at the knot (the smoothed one vanishes
+                // at r_u).
+                let e = inner.evaluate(&PairGeometry::new(n * k, si, sj)).unwrap();
+                let scale = e.energy.abs() + k * e.force.length();
+                assert!(
+                    (a.energy - b.energy).abs() <= 1e-7 * scale,
+                    "U jumps at {k}"
+                );
+                let fs = e.force.length() + e.energy.abs() / k;
+                assert!((a.force - b.force).length() <= 1e-6 * fs, "F jumps at {k}");
+                let ts = e.torque_i.length() + e.energy.abs();
+                assert!(
+                    (a.torque_i - b.torque_i).length() <= 1e-6 * ts,
+                    "τ jumps at {k}"
+                );
+            }
+            // Beyond r_u: exactly zero, force and torques too.
+            let far = p
+                .evaluate(&PairGeometry::new(n * knots[1] * 1.0001, si, sj))
+                .unwrap();
+            assert_eq!(far, potential::PairEval::default());
+        }
+    }
+}
