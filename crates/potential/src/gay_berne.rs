@@ -1,10 +1,11 @@
 //! The Gay–Berne potential between uniaxial bodies.
 //!
 //! J. G. Gay and B. J. Berne, "Modification of the overlap potential to mimic a linear
-//! site-site potential", J. Chem. Phys. 74, 3316 (1981); the form with exponents `μ`, `ν` as
-//! used in liquid-crystal simulation (e.g. D. Andrienko, "Introduction to liquid crystals",
-//! IMPRS lecture notes, Eq. 3, which we followed for the notation). With `r̂ = r_ij/r`,
-//! `a = r̂·s_i`, `b = r̂·s_j`, `c = s_i·s_j`:
+//! site-site potential", J. Chem. Phys. 74, 3316 (1981), in the form with general exponents
+//! `μ`, `ν` used in liquid-crystal simulation; we took the formula as written out in
+//! D. Andrienko's lecture "Introduction to liquid crystals" (IMPRS school, Bad Marienberg; the
+//! Gay–Berne slide, Eq. 3) and checked `χ`, `χ'` against the SklogWiki "Gay-Berne model" page.
+//! With `r̂ = r_ij/r`, `a = r̂·s_i`, `b = r̂·s_j`, `c = s_i·s_j`:
 //!
 //! ```text
 //! U     = 4 ε(r̂, s_i, s_j) [ ρ¹² − ρ⁶ ],     ρ = σ₀ / (r − σ(r̂, s_i, s_j) + σ₀)

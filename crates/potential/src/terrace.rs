@@ -209,9 +209,11 @@ impl LevelSet {
         })
     }
 
-    /// The paper's evenly spaced levels `U_k = (k − ½) ΔV` (003 §V) between the minimum and the
-    /// core. Grid levels more than the tolerance below the minimum are left out (no pair can
-    /// cross them); one within the tolerance is refused or shifted.
+    /// The paper's evenly spaced levels `U_k = (k − ½) ΔV` (003 §V), `k` running over the
+    /// integers, between the minimum and the core: `U = 0` lies mid-way between the levels
+    /// `±ΔV/2`. (003 Fig. 1 writes the same grid as `V_min + (k − ½)ΔV` with `V_min` a
+    /// multiple of `ΔV`.) Grid levels more than the tolerance below the minimum are left out (no
+    /// pair can cross them); one within the tolerance is refused or shifted.
     ///
     /// # Errors
     /// [`PotentialError::Parameter`] unless `ΔV` is finite and positive;

@@ -7,7 +7,7 @@ use common::*;
 use glam::{DQuat, DVec3};
 use potential::{LennardJones, LjRod, PairGeometry, PairPotential};
 
-const SAMPLES: usize = 400;
+const SAMPLES: usize = 2000;
 
 #[test]
 fn forces_and_torques_match_finite_differences() {
