@@ -588,7 +588,10 @@ fn main() -> ExitCode {
          (NearMinimum::Shift). B₂ and E₂ of the terraced potentials are exact sums over shells; \
          the continuous ones adaptive quadrature to 1e-13. The zero terrace (far pairs, `V = 0`, \
          the tail beyond the outermost level) dominates every error: it shrinks like √ΔV \
-         (r_c ∝ ΔV^{−1/6}, missing tail ∝ r_c⁻³), whatever the rule.\n",
+         (r_c ∝ ΔV^{−1/6}, missing tail ∝ r_c⁻³), whatever the rule. Cost column: the levels \
+         with `U ≤ 5 kT`, i.e. every negative level (all within the reach) and the positive ones \
+         a thermal pair climbs; the rest, up to the core, are reached with probability below \
+         `e⁻⁵` per encounter.\n",
     );
     let sweep: Vec<f64> = (if quick { -1..4 } else { -1..8 })
         .map(|j| 2f64.powi(-j))
@@ -650,7 +653,8 @@ fn main() -> ExitCode {
          well, offsetting part of the missing tail: a cancellation of errors, not exactness, and \
          E₂ shows it less; (4) the same number of levels with the outermost at 2.5σ, B2-matched, \
          leaves only the tail beyond 2.5σ (about 10 % of B₂ for the spheres at T* = 1 and 13 % \
-         for the rods at T* = 1.4, whatever ΔV), at the price of a reach of 2.5σ instead of \
+         for the rods at T* = 1.4, whatever ΔV, as long as there is a negative level to move), \
+         at the price of a reach of 2.5σ instead of \
          1.4–1.8σ: 3–6 times the volume per body within reach, so more pairs to search; \
          (5) with the paper's outermost level every rule converges like √ΔV (halving ΔV removes \
          only 30 % of the error): terraced thermodynamics converge to the continuous ones \
