@@ -63,6 +63,14 @@ pub(crate) const CHECKS: &[Check] = &[
         full: &["--events", "1000000"],
         quick: &["--events", "20000", "--quick"],
     },
+    Check {
+        name: "potential",
+        title: "Pair potentials and terrace maps: forces and torques, reaches, B2 of terraced potentials",
+        package: "dmd-potential",
+        example: "validate",
+        full: &[],
+        quick: &["--quick"],
+    },
 ];
 
 pub(crate) fn run(args: &[String]) -> Result<(), String> {
