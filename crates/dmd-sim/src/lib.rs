@@ -3,9 +3,10 @@
 //! Bodies move freely and exactly between events; at an event a pair reaches a step of its
 //! stepped radial potential (a hard core, the edge of a square well, a terrace of a stepped
 //! Lennard-Jones potential) and the impulse rule of [`collide`] changes their velocities. The
-//! event loop ([`schedule::Simulation`]) keeps a local clock per body, a cell list with
+//! event loop ([`simulation::Simulation`]) keeps a local clock per body, a cell list with
 //! analytic cell-crossing events, the level of every interacting pair, and its pending events
-//! in an `event_queue` queue with lazy invalidation; event times are analytic (a quadratic per
+//! in per-body lists, with each body's earliest in an `event_queue` scheduler and lazy
+//! invalidation at both levels; event times are analytic (a quadratic per
 //! boundary), and the time origin is re-based periodically.
 //!
 //! The `dmd` command runs a scene file ([`scene`], documented key by key in
@@ -53,4 +54,5 @@ pub mod potential;
 pub mod run;
 pub mod scene;
 pub mod schedule;
+pub mod simulation;
 pub mod sum;

@@ -6,7 +6,7 @@
 
 use glam::DVec3;
 
-use crate::schedule::{Sampler, View};
+use crate::simulation::{Sampler, View};
 
 /// Radial distribution function `g(r)` of all pairs.
 #[derive(Clone, Debug)]

@@ -6,7 +6,7 @@ use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-use crate::schedule::View;
+use crate::simulation::View;
 
 /// An output could not be written.
 #[derive(Debug, thiserror::Error)]

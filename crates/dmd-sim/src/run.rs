@@ -9,18 +9,18 @@ use std::path::Path;
 use std::time::Instant;
 
 use collide::Particle;
-use event_queue::{BoundedQueue, EventQueue, HeapQueue};
+use event_queue::{BoundedQueue, HeapQueue, LazyQueue, Ticket, TournamentTree};
 use glam::DVec3;
 use serde::Serialize;
 
-use crate::event::Event;
 use crate::init::{Configuration, lattice, maxwell_boltzmann, read_xyz};
 use crate::model::{HardSpheres, PairModel, Stepped};
 use crate::observable::{Correlations, Observers, Rdf, Series};
 use crate::output::{Curve, OutputError, Trajectory, plot_svg, write_atomically, write_csv};
 use crate::potential::Potentials;
 use crate::scene::{Positions, QueueKind, Scene, SceneError, ThermostatKind, ThermostatPhase};
-use crate::schedule::{Andersen, LoopSettings, Progress, SetupError, SimError, Simulation, Stop};
+use crate::schedule::Scheduler;
+use crate::simulation::{Andersen, LoopSettings, Progress, SetupError, SimError, Simulation, Stop};
 
 /// Why a run failed.
 #[derive(Debug, thiserror::Error)]
@@ -62,8 +62,13 @@ pub struct Summary {
     pub equilibration_events: u64,
     /// Wall-clock seconds of production.
     pub wall_seconds: f64,
+    /// CPU seconds of production (the thread's run time; Linux only, else equal to the wall
+    /// time). On a shared machine this is the steadier measure of cost.
+    pub cpu_seconds: f64,
     /// Production events per wall-clock second.
     pub events_per_second: f64,
+    /// Production events per CPU second.
+    pub events_per_cpu_second: f64,
     /// Pair events (collisions and step crossings) per wall-clock second.
     pub pair_events_per_second: f64,
     /// Simulated time of production.
@@ -112,12 +117,15 @@ pub struct Summary {
     pub model: String,
     /// Queue used.
     pub queue: String,
-    /// Queue statistics: events scheduled, stale events dropped on pop and swept.
-    pub queue_scheduled: u64,
-    /// Stale events dropped when popped.
+    /// Entries pushed into the scheduler (each body's earliest event, re-set at every change).
+    pub queue_pushed: u64,
+    /// Superseded scheduler entries dropped when popped (queues).
     pub queue_stale_dropped: u64,
-    /// Stale events removed by sweeps.
+    /// Superseded scheduler entries removed by sweeps (queues).
     pub queue_stale_swept: u64,
+    /// Bodies rescheduled from their own event list because the partner of their earliest
+    /// event had changed (no rescan needed).
+    pub requeued: u64,
     /// Self-diffusion coefficient from the MSD slope (when `output.msd` is on).
     pub diffusion_msd: Option<f64>,
     /// Self-diffusion coefficient from the Green–Kubo VACF integral (when `output.vacf` is on).
@@ -186,22 +194,26 @@ pub fn run_scene(
         settings,
         out,
     };
+    type Bounded = LazyQueue<BoundedQueue<Ticket>>;
+    type Heap = LazyQueue<HeapQueue<Ticket>>;
     match (hard, scene.run.queue) {
-        (true, QueueKind::Bounded) => ctx.go::<_, BoundedQueue<Event>>(
-            HardSpheres::new(potentials, particles),
-            true,
-            reporter,
-        ),
-        (true, QueueKind::Heap) => {
-            ctx.go::<_, HeapQueue<Event>>(HardSpheres::new(potentials, particles), true, reporter)
+        (true, QueueKind::Bounded) => {
+            ctx.go::<_, Bounded>(HardSpheres::new(potentials, particles), true, reporter)
         }
-        (false, QueueKind::Bounded) => ctx.go::<_, BoundedQueue<Event>>(
-            Stepped::new(potentials, particles, n),
-            false,
-            reporter,
-        ),
+        (true, QueueKind::Heap) => {
+            ctx.go::<_, Heap>(HardSpheres::new(potentials, particles), true, reporter)
+        }
+        (true, QueueKind::Tournament) => {
+            ctx.go::<_, TournamentTree>(HardSpheres::new(potentials, particles), true, reporter)
+        }
+        (false, QueueKind::Bounded) => {
+            ctx.go::<_, Bounded>(Stepped::new(potentials, particles, n), false, reporter)
+        }
         (false, QueueKind::Heap) => {
-            ctx.go::<_, HeapQueue<Event>>(Stepped::new(potentials, particles, n), false, reporter)
+            ctx.go::<_, Heap>(Stepped::new(potentials, particles, n), false, reporter)
+        }
+        (false, QueueKind::Tournament) => {
+            ctx.go::<_, TournamentTree>(Stepped::new(potentials, particles, n), false, reporter)
         }
     }
 }
@@ -215,7 +227,7 @@ struct Context<'a> {
 }
 
 impl Context<'_> {
-    fn go<M: PairModel, Q: EventQueue<Payload = Event> + Default>(
+    fn go<M: PairModel, Q: Scheduler>(
         &self,
         model: M,
         hard: bool,
@@ -251,7 +263,7 @@ impl Context<'_> {
                 sim.set_thermostat(andersen);
             }
             reporter.phase("equilibration", eq_stop);
-            sim.run(eq_stop, &mut crate::schedule::NoSampler, &mut |p| {
+            sim.run(eq_stop, &mut crate::simulation::NoSampler, &mut |p| {
                 reporter.progress(p)
             })?;
             reporter.done();
@@ -326,8 +338,13 @@ impl Context<'_> {
         };
         reporter.phase("production", stop);
         let wall = Instant::now();
+        let cpu0 = thread_cpu_seconds();
         sim.run(stop, &mut observers, &mut |p| reporter.progress(p))?;
         let wall_seconds = wall.elapsed().as_secs_f64();
+        let cpu_seconds = match (cpu0, thread_cpu_seconds()) {
+            (Some(a), Some(b)) => b - a,
+            _ => wall_seconds,
+        };
         reporter.done();
 
         // Summary.
@@ -375,13 +392,15 @@ impl Context<'_> {
         .into_iter()
         .map(|(k, v)| (k.to_owned(), v))
         .collect();
-        let qs = sim.queue_stats();
+        let qs = sim.schedule_stats();
         let mut summary = Summary {
             events: counters.events,
             events_by_kind: by_kind,
             equilibration_events,
             wall_seconds,
+            cpu_seconds,
             events_per_second: counters.events as f64 / wall_seconds,
+            events_per_cpu_second: counters.events as f64 / cpu_seconds,
             pair_events_per_second: pair_events as f64 / wall_seconds,
             sim_time: t,
             n_bodies: n as u64,
@@ -412,11 +431,13 @@ impl Context<'_> {
             queue: match scene.run.queue {
                 QueueKind::Bounded => "bounded",
                 QueueKind::Heap => "heap",
+                QueueKind::Tournament => "tournament",
             }
             .to_owned(),
-            queue_scheduled: qs.scheduled,
-            queue_stale_dropped: qs.dropped_stale,
-            queue_stale_swept: qs.swept,
+            queue_pushed: qs.pushed,
+            queue_stale_dropped: qs.stale_dropped,
+            queue_stale_swept: qs.stale_swept,
+            requeued: qs.requeued,
             diffusion_msd: observers
                 .correlations
                 .as_ref()
@@ -437,6 +458,13 @@ impl Context<'_> {
         }
         Ok(summary)
     }
+}
+
+/// CPU time of the calling thread, from `/proc/thread-self/schedstat` (Linux).
+pub fn thread_cpu_seconds() -> Option<f64> {
+    let text = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
+    let ns: f64 = text.split_whitespace().next()?.parse().ok()?;
+    Some(ns * 1e-9)
 }
 
 fn setup_error(scene: &Scene, e: SetupError) -> RunError {

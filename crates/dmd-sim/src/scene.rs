@@ -215,6 +215,8 @@ pub enum QueueKind {
     Bounded,
     /// Binary heap, O(log n).
     Heap,
+    /// Tournament tree, one leaf per body, updated in place.
+    Tournament,
 }
 
 /// Run length and numerical settings.
@@ -389,8 +391,9 @@ impl Scene {
     /// Applies one `KEY=VALUE` override to a parsed scene document. `KEY` is a dotted path
     /// (`run.events`, `species.0.mass`: an index picks an element of an array); `VALUE` is
     /// read as a TOML value (`0.5`, `[1, 1, 2]`, `"heap"`, `inf`), or as a string if it is not
-    /// one (`run.queue=heap`). Keys the scene does not know are caught by the same check as
-    /// in a file.
+    /// one (`run.queue=heap`); an empty `VALUE` removes the key (`run.events=` to give
+    /// `run.time` instead). Keys the scene does not know are caught by the same check as in a
+    /// file.
     ///
     /// # Errors
     /// [`SceneError::Override`] if the argument has no `=` or the path cannot be followed.
@@ -406,8 +409,11 @@ impl Scene {
         if key.is_empty() || key.split('.').any(str::is_empty) {
             return Err(bad(format!("`{key}` is not a dotted key path")));
         }
-        let value = parse_value(value.trim());
         let parts: Vec<&str> = key.split('.').collect();
+        if value.trim().is_empty() {
+            return remove_key(doc, &parts).map_err(bad);
+        }
+        let value = parse_value(value.trim());
         let mut node: &mut toml::Value = {
             // The root is a table; wrap the walk in a Value for uniformity.
             let first = parts[0];
@@ -787,6 +793,27 @@ fn check_steps(k: usize, steps: &[[f64; 2]]) -> Result<(), SceneError> {
     Ok(())
 }
 
+/// Removes a dotted key (an `--set KEY=` override).
+fn remove_key(doc: &mut toml::Table, parts: &[&str]) -> Result<(), String> {
+    let (last, path) = parts.split_last().expect("a key has at least one part");
+    let mut table = doc;
+    let mut walked = String::new();
+    for part in path {
+        if !walked.is_empty() {
+            walked.push('.');
+        }
+        walked.push_str(part);
+        table = match table.get_mut(*part) {
+            Some(toml::Value::Table(t)) => t,
+            _ => return Err(format!("`{walked}` is not a table of the scene")),
+        };
+    }
+    table
+        .remove(*last)
+        .map(|_| ())
+        .ok_or_else(|| format!("the scene has no key `{}` to remove", parts.join(".")))
+}
+
 /// Reads an override value as TOML, or as a string if it is not valid TOML.
 fn parse_value(text: &str) -> toml::Value {
     format!("v = {text}")
@@ -858,6 +885,14 @@ events = 1000
             e.to_string(),
             "override `species.3.mass=1`: `species` has 1 elements, no index 3"
         );
+        let e = Scene::from_str_with(MINIMAL, &["run.evnts=".into()]).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "override `run.evnts=`: the scene has no key `run.evnts` to remove"
+        );
+        let s =
+            Scene::from_str_with(MINIMAL, &["run.events=".into(), "run.time=2".into()]).unwrap();
+        assert_eq!((s.run.events, s.run.time), (None, Some(2.0)));
         let e = Scene::from_str_with(MINIMAL, &["seed.x=1".into()]).unwrap_err();
         assert_eq!(
             e.to_string(),

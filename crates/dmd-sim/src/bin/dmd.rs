@@ -11,7 +11,7 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 use dmd_sim::run::{Reporter, Summary, run_scene};
 use dmd_sim::scene::Scene;
-use dmd_sim::schedule::{Progress, Stop};
+use dmd_sim::simulation::{Progress, Stop};
 use indicatif::{ProgressBar, ProgressStyle};
 
 /// Event-driven molecular dynamics of spheres with hard cores, square wells and stepped
