@@ -1,7 +1,7 @@
 //! Events: what each body has predicted, kept in its own short list.
 //!
 //! Every body owns a list of the events it predicted at its last change (one per partner it
-//! will meet, plus its next cell crossing). The global queue holds only each body's earliest
+//! will meet, plus the time it leaves its neighbour-list skin). The global queue holds only each body's earliest
 //! event (see [`schedule`](crate::schedule)), so a collision pushes two entries into the queue,
 //! not one per predicted pair, and the queue stays at N entries.
 //!
@@ -28,16 +28,12 @@ pub enum Boundary {
 pub enum Kind {
     /// The pair (owner, partner) reaches a boundary of its level.
     Pair(Boundary),
-    /// The owner leaves its cell through a face along `axis` (0, 1, 2), upwards if `up`.
-    Cell {
-        /// Axis of the face.
-        axis: u8,
-        /// Whether the body moves towards larger coordinates.
-        up: bool,
-    },
+    /// The owner leaves the skin sphere around its neighbour-list centre: it rebuilds its
+    /// list (see [`neighbour`](crate::neighbour)).
+    Shell,
 }
 
-/// No partner (cell crossings).
+/// No partner (shell crossings).
 pub const NOBODY: u32 = u32::MAX;
 
 /// One predicted event in a body's list (24 bytes).
@@ -47,7 +43,7 @@ pub struct Event {
     pub time: f64,
     /// The partner's generation when the event was predicted.
     pub partner_gen: u64,
-    /// The partner ([`NOBODY`] for a cell crossing).
+    /// The partner ([`NOBODY`] for a shell crossing).
     pub partner: u32,
     /// What happens.
     pub kind: Kind,
@@ -79,7 +75,7 @@ const EMPTY: Event = Event {
     time: f64::INFINITY,
     partner_gen: 0,
     partner: NOBODY,
-    kind: Kind::Cell { axis: 0, up: false },
+    kind: Kind::Shell,
 };
 
 impl EventLists {

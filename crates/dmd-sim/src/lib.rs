@@ -47,6 +47,7 @@ pub mod cell;
 pub mod event;
 pub mod init;
 pub mod model;
+pub mod neighbour;
 pub mod observable;
 pub mod output;
 pub mod pair_state;

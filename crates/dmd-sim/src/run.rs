@@ -172,6 +172,7 @@ pub fn run_scene(
         .collect();
     let velocities = maxwell_boltzmann(&masses, scene.init.temperature, scene.seed);
     let n = config.positions.len();
+    let skin = choose_skin(scene, &potentials, &config)?;
     let settings = LoopSettings {
         rebase_events: scene
             .run
@@ -179,6 +180,7 @@ pub fn run_scene(
             .unwrap_or_else(|| (100 * n as u64).max(1_000_000)),
         seed: scene.seed.wrapping_add(0x7e57_0000_0000_0001),
         debug_check_events: (n as u64).max(1000),
+        skin,
     };
     if let Some(dir) = out {
         std::fs::create_dir_all(dir).map_err(|e| OutputError {
@@ -376,7 +378,7 @@ impl Context<'_> {
             ("step_in", counters.step_in),
             ("step_out", counters.step_out),
             ("step_reflect", counters.step_reflect),
-            ("cell_crossing", counters.cell),
+            ("shell_crossing", counters.shell),
             ("thermostat", counters.thermostat),
             ("samples", counters.samples),
             ("rebases", counters.rebases),
@@ -458,6 +460,38 @@ impl Context<'_> {
         }
         Ok(summary)
     }
+}
+
+/// The neighbour-list skin: `run.skin`, or by default a quarter of the Boltzmann mean free
+/// path `1/(√2 π ρ R²)` at the largest reach `R`, kept between 0.05 R and 0.5 R, and reduced to
+/// fit three cells of `R + 2δ` along the shortest box side.
+fn choose_skin(
+    scene: &Scene,
+    potentials: &Potentials,
+    config: &Configuration,
+) -> Result<f64, SceneError> {
+    let reach = potentials.reach();
+    let l = config.lengths;
+    let fit = (l.min_element() / 3.0 - reach) / 2.0;
+    if let Some(skin) = scene.run.skin {
+        if skin > fit {
+            return Err(SceneError::invalid(
+                "run.skin",
+                format!(
+                    "{skin} is too large for this box: three cells of reach + 2 skin must fit \
+                     along the shortest side {}, so the skin can be at most {fit:.6}",
+                    l.min_element()
+                ),
+            ));
+        }
+        return Ok(skin);
+    }
+    let rho = config.positions.len() as f64 / (l.x * l.y * l.z);
+    let mean_free_path =
+        1.0 / (std::f64::consts::SQRT_2 * std::f64::consts::PI * rho * reach * reach);
+    let skin = (0.25 * mean_free_path).clamp(0.05 * reach, 0.5 * reach);
+    // Too small a box for even the smallest skin is reported by the set-up.
+    Ok(skin.min(0.999 * fit).max(0.01 * reach))
 }
 
 /// CPU time of the calling thread, from `/proc/thread-self/schedstat` (Linux).

@@ -239,6 +239,8 @@ pub struct RunSpec {
     /// Events between re-basings of the time origin (default 100 N, at least 10⁶).
     #[serde(default, deserialize_with = "opt_count")]
     pub rebase_events: Option<u64>,
+    /// Neighbour-list skin δ, a length (default: chosen from the density, see the user guide).
+    pub skin: Option<f64>,
 }
 
 /// Radial distribution function.
@@ -660,6 +662,9 @@ impl Scene {
             }
             (_, Some(t)) => positive("run.time", t)?,
             (Some(_), None) => {}
+        }
+        if let Some(skin) = r.skin {
+            positive("run.skin", skin)?;
         }
         if r.rebase_events == Some(0) {
             return Err(SceneError::invalid(
