@@ -898,10 +898,15 @@ events = 1000
         let s =
             Scene::from_str_with(MINIMAL, &["run.events=".into(), "run.time=2".into()]).unwrap();
         assert_eq!((s.run.events, s.run.time), (None, Some(2.0)));
+        let e = Scene::from_str_with(MINIMAL, &["run.events.x=1".into()]).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "override `run.events.x=1`: `run.events` is a value, not a table"
+        );
         let e = Scene::from_str_with(MINIMAL, &["seed.x=1".into()]).unwrap_err();
         assert_eq!(
             e.to_string(),
-            "override `seed.x=1`: `seed` is a value, not a table"
+            "scene key `seed`: invalid type: map, expected u64"
         );
     }
 }
