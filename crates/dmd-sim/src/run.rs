@@ -462,9 +462,11 @@ impl Context<'_> {
     }
 }
 
-/// The neighbour-list skin: `run.skin`, or by default a quarter of the Boltzmann mean free
-/// path `1/(√2 π ρ R²)` at the largest reach `R`, kept between 0.05 R and 0.5 R, and reduced to
-/// fit three cells of `R + 2δ` along the shortest box side.
+/// The neighbour-list skin: `run.skin`, or by default 0.3 × the Boltzmann mean free path
+/// `1/(√2 π ρ R²)` at the largest reach `R`, kept between R/4 and 2R, and reduced to fit three
+/// cells of `R + 2δ` along the shortest box side. (Measured optimum for hard spheres with
+/// N = 4000: δ ≈ 0.2–0.3 at ρ = 0.5–0.94, 0.5–1 at ρ = 0.1, 1–2 at ρ = 0.01; see
+/// docs/PERFORMANCE.md.)
 fn choose_skin(
     scene: &Scene,
     potentials: &Potentials,
@@ -473,6 +475,20 @@ fn choose_skin(
     let reach = potentials.reach();
     let l = config.lengths;
     let fit = (l.min_element() / 3.0 - reach) / 2.0;
+    if fit < 0.01 * reach {
+        let a = (0..3).min_by(|&a, &b| l[a].total_cmp(&l[b])).unwrap_or(0);
+        return Err(SceneError::invalid(
+            "box",
+            format!(
+                "the box side {:.6} along {} is less than 3 × the interaction range {reach} \
+                 (= {:.6}) plus the neighbour-list skin: the cell list needs three cells along \
+                 each axis; use more bodies or a lower density",
+                l[a],
+                ['x', 'y', 'z'][a],
+                3.0 * reach
+            ),
+        ));
+    }
     if let Some(skin) = scene.run.skin {
         if skin > fit {
             return Err(SceneError::invalid(
@@ -489,9 +505,8 @@ fn choose_skin(
     let rho = config.positions.len() as f64 / (l.x * l.y * l.z);
     let mean_free_path =
         1.0 / (std::f64::consts::SQRT_2 * std::f64::consts::PI * rho * reach * reach);
-    let skin = (0.25 * mean_free_path).clamp(0.05 * reach, 0.5 * reach);
-    // Too small a box for even the smallest skin is reported by the set-up.
-    Ok(skin.min(0.999 * fit).max(0.01 * reach))
+    let skin = (0.3 * mean_free_path).clamp(0.25 * reach, 2.0 * reach);
+    Ok(skin.min(0.999 * fit))
 }
 
 /// CPU time of the calling thread, from `/proc/thread-self/schedstat` (Linux).

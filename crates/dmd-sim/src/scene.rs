@@ -587,8 +587,7 @@ impl Scene {
                     return Err(SceneError::invalid(
                         "pair",
                         format!(
-                            "no pair table for species `{}` and `{}`: every pair of species needs one \
-                             (for an ideal gas use a single tiny step)",
+                            "no pair table for species `{}` and `{}`: every pair of species needs one",
                             names[a], names[b]
                         ),
                     ));
