@@ -157,6 +157,34 @@ impl Potentials {
         }
     }
 
+    /// From explicit tables: `tables[k] = ((a, b), steps)` for species `a`, `b` in
+    /// `0..n_species`. Every unordered pair must appear exactly once, with radii strictly
+    /// increasing (what a scene's check guarantees).
+    ///
+    /// # Panics
+    /// If a pair is missing or given twice.
+    pub fn from_tables(n_species: usize, tables: &[((usize, usize), Vec<[f64; 2]>)]) -> Self {
+        let n = n_species;
+        let mut table = vec![u32::MAX; n * n];
+        let mut potentials = Vec::new();
+        for ((a, b), steps) in tables {
+            assert_eq!(table[a * n + b], u32::MAX, "pair ({a}, {b}) given twice");
+            let k = potentials.len() as u32;
+            potentials.push(StepPotential::new(steps));
+            table[a * n + b] = k;
+            table[b * n + a] = k;
+        }
+        assert!(
+            table.iter().all(|&k| k != u32::MAX),
+            "a pair of species has no table"
+        );
+        Potentials {
+            n_species: n,
+            table,
+            potentials,
+        }
+    }
+
     /// The potential between species `a` and `b`.
     #[inline]
     pub fn get(&self, a: u32, b: u32) -> &StepPotential {

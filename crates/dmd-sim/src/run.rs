@@ -181,6 +181,7 @@ pub fn run_scene(
         seed: scene.seed.wrapping_add(0x7e57_0000_0000_0001),
         debug_check_events: (n as u64).max(1000),
         skin,
+        start_time: 0.0,
     };
     if let Some(dir) = out {
         std::fs::create_dir_all(dir).map_err(|e| OutputError {

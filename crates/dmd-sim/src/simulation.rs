@@ -236,6 +236,9 @@ pub struct LoopSettings {
     pub debug_check_events: u64,
     /// Neighbour-list skin `δ` (a body rebuilds its list when it is `δ` from its centre).
     pub skin: f64,
+    /// Time of the first frame (0 normally; tests start far from zero to show what re-basing
+    /// the time origin protects against).
+    pub start_time: f64,
 }
 
 /// An Andersen thermostat.
@@ -372,7 +375,7 @@ where
             cells.insert(i as u32, cell);
             bodies.push(Body {
                 r,
-                t: 0.0,
+                t: settings.start_time,
                 v,
                 species: species[i],
                 cell,
@@ -451,7 +454,7 @@ where
             old_stats: (0, 0, 0),
             requeued: 0,
             system,
-            now: 0.0,
+            now: settings.start_time,
             epoch: Compensated::ZERO,
             lengths,
             half: lengths * 0.5,
@@ -459,7 +462,11 @@ where
             anomalies: Anomalies::default(),
             kinetic: 0.0,
             potential: 0.0,
-            phase: Phase::default(),
+            phase: Phase {
+                start: settings.start_time,
+                last_change: settings.start_time,
+                ..Phase::default()
+            },
             thermostat: None,
             rng: Xoshiro256PlusPlus::seed_from_u64(settings.seed),
             next_thermostat: f64::INFINITY,
@@ -1391,6 +1398,7 @@ events = 10
             seed: 1,
             debug_check_events: 1,
             skin: 0.2,
+            start_time: 0.0,
         }
     }
 
