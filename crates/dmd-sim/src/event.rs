@@ -141,16 +141,6 @@ impl EventLists {
         }
     }
 
-    /// Shifts every event time by `-t0` (re-basing the time origin).
-    pub fn shift(&mut self, t0: f64) {
-        for i in 0..self.len.len() {
-            let base = i * self.cap;
-            for e in &mut self.events[base..base + self.len[i] as usize] {
-                e.time -= t0;
-            }
-        }
-    }
-
     /// Slots per body (grows on overflow).
     pub fn capacity(&self) -> usize {
         self.cap
@@ -209,8 +199,7 @@ mod tests {
         assert!(l.earliest(0, &gens).is_none());
         assert!(l.of(0).is_empty());
         l.push(1, ev(1.0, 0, 0));
-        l.shift(0.5);
-        assert_eq!(l.of(1)[0].time, 0.5);
+        assert_eq!(l.of(1)[0].time, 1.0);
         l.clear(1);
         assert!(l.of(1).is_empty());
     }
