@@ -56,9 +56,9 @@ pub fn box_lengths(scene: &Scene) -> Option<DVec3> {
 /// mixture is mixed).
 ///
 /// # Errors
-/// [`SceneError::Invalid`] naming `box.density` if the lattice would put hard cores closer
-/// than their diameter.
-pub fn lattice(scene: &Scene, largest_core: f64) -> Result<Configuration, SceneError> {
+/// [`SceneError::Invalid`] naming `box.density` if neighbouring lattice sites are closer
+/// than the smallest hard-core diameter (no species could sit on them).
+pub fn lattice(scene: &Scene, smallest_core: f64) -> Result<Configuration, SceneError> {
     let lengths = box_lengths(scene).expect("a lattice scene has a box");
     let n = scene.n_bodies() as usize;
     let basis = basis(scene.init.positions);
@@ -91,7 +91,7 @@ pub fn lattice(scene: &Scene, largest_core: f64) -> Result<Configuration, SceneE
     };
     // Single-cell-thick axes: the periodic image along that axis is one cell away.
     let spacing = spacing.min(cell.min_element());
-    if largest_core > 0.0 && spacing < largest_core {
+    if smallest_core > 0.0 && spacing < smallest_core {
         let name = match scene.init.positions {
             Positions::Fcc => "fcc",
             _ => "sc",
@@ -101,7 +101,7 @@ pub fn lattice(scene: &Scene, largest_core: f64) -> Result<Configuration, SceneE
             "box.density",
             format!(
                 "density {rho:.6} is too high for an {name} lattice of {n} bodies: neighbouring \
-                 sites are {spacing:.6} apart, less than the hard-core diameter {largest_core}; \
+                 sites are {spacing:.6} apart, less than the hard-core diameter {smallest_core}; \
                  lower the density, use an fcc lattice, or start from a file"
             ),
         ));

@@ -11,6 +11,8 @@ use crate::simulation::{Sampler, View};
 /// Radial distribution function `g(r)` of all pairs.
 #[derive(Clone, Debug)]
 pub struct Rdf {
+    every: u64,
+    seen: u64,
     r_max: f64,
     width: f64,
     counts: Vec<u64>,
@@ -20,9 +22,12 @@ pub struct Rdf {
 }
 
 impl Rdf {
-    /// `bins` bins up to `r_max` (at most half the smallest box side).
-    pub fn new(bins: usize, r_max: f64) -> Self {
+    /// `bins` bins up to `r_max` (at most half the smallest box side), evaluated at every
+    /// `every`-th sample.
+    pub fn new(bins: usize, r_max: f64, every: u64) -> Self {
         Rdf {
+            every: every.max(1),
+            seen: 0,
             r_max,
             width: r_max / bins as f64,
             counts: vec![0; bins],
@@ -33,6 +38,10 @@ impl Rdf {
     }
 
     fn sample(&mut self, view: &View<'_>) {
+        self.seen += 1;
+        if (self.seen - 1) % self.every != 0 {
+            return;
+        }
         let n = view.bodies.len();
         let pos: Vec<DVec3> = (0..n)
             .map(|i| wrap(view.position(i), view.lengths))

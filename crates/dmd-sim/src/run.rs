@@ -153,13 +153,20 @@ pub fn run_scene(
         .iter()
         .map(|s| Particle::new(s.mass).expect("masses are checked"))
         .collect();
-    let largest_core = potentials
+    // A lattice denser than the smallest hard core allows can hold no species; pairs of larger
+    // cores that end up too close are reported by the set-up.
+    let smallest_core = potentials
         .all()
         .iter()
         .filter_map(|p| p.core())
-        .fold(0.0, f64::max);
+        .fold(f64::INFINITY, f64::min);
+    let smallest_core = if smallest_core.is_finite() {
+        smallest_core
+    } else {
+        0.0
+    };
     let config = match scene.init.positions {
-        Positions::Fcc | Positions::Sc => lattice(scene, largest_core)?,
+        Positions::Fcc | Positions::Sc => lattice(scene, smallest_core)?,
         Positions::File => {
             let file = scene.init.file.as_ref().expect("checked");
             read_xyz(scene, &base.join(file))?
@@ -245,7 +252,7 @@ impl Context<'_> {
             model,
             self.settings,
         )
-        .map_err(|e| setup_error(scene, e))?;
+        .map_err(|e| setup_error(scene, self.config, e))?;
 
         // Equilibration.
         let andersen = (scene.thermostat.kind == ThermostatKind::Andersen).then(|| Andersen {
@@ -293,7 +300,7 @@ impl Context<'_> {
                 )
                 .into());
             }
-            observers.rdf = Some(Rdf::new(rdf.bins as usize, r_max));
+            observers.rdf = Some(Rdf::new(rdf.bins as usize, r_max, rdf.every));
         }
         if o.msd.is_some() || o.vacf.is_some() {
             let lag = o
@@ -517,15 +524,35 @@ pub fn thread_cpu_seconds() -> Option<f64> {
     Some(ns * 1e-9)
 }
 
-fn setup_error(scene: &Scene, e: SetupError) -> RunError {
-    let key = match (&e, scene.init.positions) {
-        (SetupError::BoxTooSmall { .. }, _) => "box",
-        (_, Positions::File) => "init.file",
-        _ => "init.positions",
-    };
-    let problem = match e {
-        SetupError::Overlap { .. } => format!("overlapping initial configuration: {e}"),
-        _ => e.to_string(),
+fn setup_error(scene: &Scene, config: &Configuration, e: SetupError) -> RunError {
+    let (key, problem) = match (&e, scene.init.positions) {
+        (SetupError::BoxTooSmall { .. }, _) => ("box", e.to_string()),
+        (SetupError::Overlap { .. }, Positions::File) => (
+            "init.file",
+            format!("overlapping initial configuration: {e}"),
+        ),
+        (
+            SetupError::Overlap {
+                i,
+                j,
+                distance,
+                core,
+            },
+            _,
+        ) => {
+            let name = |k: &u32| &scene.species[config.species[*k as usize] as usize].name;
+            (
+                "box.density",
+                format!(
+                    "density too high for this lattice: it puts bodies {i} ({}) and {j} ({}) \
+                     {distance:.6} apart, less than their hard-core diameter {core}; lower the \
+                     density or start from a file",
+                    name(i),
+                    name(j)
+                ),
+            )
+        }
+        _ => ("init.positions", e.to_string()),
     };
     SceneError::invalid(key, problem).into()
 }

@@ -252,6 +252,14 @@ pub struct RdfSpec {
     pub bins: u64,
     /// Largest distance (default: half the smallest box side, at most 5).
     pub r_max: Option<f64>,
+    /// Evaluate g(r) at every `every`-th sample only (default 10): one evaluation costs about
+    /// as much as N · ρ · (4π/3) r_max³ pair distances.
+    #[serde(default = "default_rdf_every", deserialize_with = "count")]
+    pub every: u64,
+}
+
+fn default_rdf_every() -> u64 {
+    10
 }
 
 fn default_bins() -> u64 {
@@ -703,6 +711,12 @@ impl Scene {
             }
             if let Some(r) = rdf.r_max {
                 positive("output.rdf.r_max", r)?;
+            }
+            if rdf.every == 0 {
+                return Err(SceneError::invalid(
+                    "output.rdf.every",
+                    "must be at least 1",
+                ));
             }
         }
         for (name, c) in [("msd", &o.msd), ("vacf", &o.vacf)] {
