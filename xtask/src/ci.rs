@@ -11,8 +11,8 @@ use crate::workspace_root;
 pub(crate) const TEST_COMMAND: &str = "cargo test --workspace";
 
 /// The README's first command, the main job: a `dmd run` of a shipped scene.
-pub(crate) const MAIN_COMMAND: &str =
-    "cargo run --release -p dmd-sim --bin dmd -- run scenes/hard-spheres.toml --out out/hard-spheres";
+#[cfg(test)]
+pub(crate) const MAIN_COMMAND: &str = "cargo run --release -p dmd-sim --bin dmd -- run scenes/hard-spheres.toml --out out/hard-spheres";
 
 /// One CI step: what it checks, the command line, and extra environment variables.
 pub(crate) type Step = (
@@ -123,7 +123,10 @@ mod tests {
             .nth(1)
             .and_then(|b| b.lines().next())
             .expect("README.md has a ```sh block");
-        assert_eq!(first, MAIN_COMMAND, "the README's first command is not the main job");
+        assert_eq!(
+            first, MAIN_COMMAND,
+            "the README's first command is not the main job"
+        );
         let scene = MAIN_COMMAND
             .split_whitespace()
             .find(|w| w.ends_with(".toml"))

@@ -57,7 +57,7 @@ impl CellGrid {
         let mut n = [0u32; 3];
         for a in 0..3 {
             let fit = (lengths[a] / reach).floor();
-            if !(fit >= 3.0) {
+            if fit.is_nan() || fit < 3.0 {
                 return Err(a);
             }
             n[a] = fit.min(f64::from(MAX_CELLS_PER_AXIS)) as u32;

@@ -164,7 +164,7 @@ pub fn read_xyz(scene: &Scene, path: &Path) -> Result<Configuration, SceneError>
         )));
     }
     let comment = lines.next().unwrap_or("");
-    let file_box = parse_lattice(comment).map_err(|m| err(m))?;
+    let file_box = parse_lattice(comment).map_err(&err)?;
     let lengths = match (box_lengths(scene), file_box) {
         (Some(l), _) => l,
         (None, Some(l)) => l,

@@ -39,7 +39,7 @@ impl Rdf {
 
     fn sample(&mut self, view: &View<'_>) {
         self.seen += 1;
-        if (self.seen - 1) % self.every != 0 {
+        if !(self.seen - 1).is_multiple_of(self.every) {
             return;
         }
         let n = view.bodies.len();
@@ -191,7 +191,7 @@ impl Correlations {
         let n = view.bodies.len();
         let k = self.samples;
         self.samples += 1;
-        if k % self.origin_every == 0 {
+        if k.is_multiple_of(self.origin_every) {
             self.origins.push(Origin {
                 sample: k,
                 r0: (0..n).map(|i| view.unwrapped(i)).collect(),
@@ -204,9 +204,9 @@ impl Correlations {
         for o in &self.origins {
             let lag = (k - o.sample) as usize;
             let (mut m, mut c) = (0.0, 0.0);
-            for i in 0..n {
+            for (i, b) in view.bodies.iter().enumerate() {
                 m += (now[i] - o.r0[i]).length_squared();
-                c += view.bodies[i].v.dot(o.v0[i]);
+                c += b.v.dot(o.v0[i]);
             }
             self.msd[lag] += m / n as f64;
             self.vacf[lag] += c / n as f64;

@@ -119,6 +119,9 @@ impl StepPotential {
     }
 }
 
+/// A pair table for [`Potentials::from_tables`]: the two species and the `[radius, step]`s.
+pub type PairTable = ((usize, usize), Vec<[f64; 2]>);
+
 /// All pair potentials of a scene: a symmetric species × species table.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Potentials {
@@ -163,7 +166,7 @@ impl Potentials {
     ///
     /// # Panics
     /// If a pair is missing or given twice.
-    pub fn from_tables(n_species: usize, tables: &[((usize, usize), Vec<[f64; 2]>)]) -> Self {
+    pub fn from_tables(n_species: usize, tables: &[PairTable]) -> Self {
         let n = n_species;
         let mut table = vec![u32::MAX; n * n];
         let mut potentials = Vec::new();

@@ -1095,8 +1095,8 @@ where
         let mut m = Compensated::ZERO;
         for b in &self.bodies {
             let mi = self.masses[b.species as usize];
-            for a in 0..3 {
-                p[a].add(mi * b.v[a]);
+            for (a, pa) in p.iter_mut().enumerate() {
+                pa.add(mi * b.v[a]);
             }
             m.add(mi);
         }

@@ -226,8 +226,8 @@ fn compare<M: PairModel, S: Scheduler>(
     assert_eq!(sim.anomalies().total(), 0);
     let pos = sim.positions();
     let mut worst: f64 = 0.0;
-    for i in 0..n {
-        let d = reference.min_image(pos[i] - reference.r[i]).length();
+    for (i, p) in pos.iter().enumerate() {
+        let d = reference.min_image(*p - reference.r[i]).length();
         let dv = (sim.bodies()[i].v - reference.v[i]).length();
         worst = worst.max(d).max(dv);
     }
