@@ -358,38 +358,40 @@ fn validate(args: &Args, work: &Path, r: &mut Report) -> Result<(), String> {
     writeln!(w, "### Hard spheres: self-diffusion\n").ok();
     writeln!(
         w,
-        "D from the slope of the mean-square displacement (second half of the lags) and from the \
-         Green–Kubo integral of the VACF. Finite periodic boxes slow diffusion by ∝ 1/L \
-         (hydrodynamic self-interaction); the full run extrapolates two sizes linearly in 1/L, \
-         the quick run compares the N = 4000 value directly. Reference: Speedy 1987 (re-assessed \
-         simulation data, infinite system). Tolerance 8 %.\n"
+        "D from the slope of the mean-square displacement (second half of the lags; the \
+         Green–Kubo integral of the VACF sampled at the same interval is shown alongside and is \
+         only as good as that sampling resolves the first collisions). Speedy's correlation \
+         (Mol. Phys. 62, 509, 1987) represents the simulation data of systems of about 500 \
+         spheres (Sigurgeirsson & Heyes, Mol. Phys. 101, 469, 2003, found it fits their N ≈ 500 \
+         data well); periodic boxes slow diffusion by ∝ 1/L, so the check (8 %) is at N = 500 \
+         and larger systems are listed to show the size effect.\n"
     )
     .ok();
     writeln!(
         w,
-        "| ρσ³ | N | L | D (MSD) | D (VACF) | D (1/L → 0) | D Speedy | deviation | check |"
+        "| ρσ³ | N | L | simulated time | D (MSD) | D (VACF) | D Speedy | deviation | check |"
     )
     .ok();
     writeln!(w, "|---|---|---|---|---|---|---|---|---|").ok();
-    let diff_rhos: &[f64] = if q { &[0.5] } else { &[0.5, 0.8] };
-    let sizes: &[u64] = if q { &[4000] } else { &[1372, 4000] };
-    for &rho in diff_rhos {
-        let mut pts = Vec::new();
+    let sizes: &[u64] = if q { &[500] } else { &[500, 4000] };
+    for rho in [0.5, 0.8] {
         let (lag, time) = if rho < 0.6 {
-            (4.0, if q { 40.0 } else { 400.0 })
+            (4.0, if q { 150.0 } else { 2000.0 })
         } else {
-            (10.0, if q { 60.0 } else { 800.0 })
+            (8.0, if q { 150.0 } else { 2000.0 })
         };
         for &n in sizes {
             let dir = work.join(format!("diff-{rho}-{n}"));
+            let time = if n > 1000 { time / 4.0 } else { time };
             let sum = run(
                 HS,
                 &[
                     format!("box.density={rho}"),
                     format!("species.0.count={n}"),
+                    s("run.equilibration_events=5e5"),
                     s("run.events="),
                     format!("run.time={time}"),
-                    s("output.sample_interval=0.1"),
+                    s("output.sample_interval=0.05"),
                     format!("output.msd={{ max_lag = {lag} }}"),
                     format!("output.vacf={{ max_lag = {} }}", lag / 2.0),
                     s("output.plots=false"),
@@ -398,31 +400,18 @@ fn validate(args: &Args, work: &Path, r: &mut Report) -> Result<(), String> {
             )?;
             let l = sum.box_lengths[0];
             let d = sum.diffusion_msd.unwrap_or(f64::NAN);
-            pts.push((1.0 / l, d));
-            let last = n == *sizes.last().unwrap_or(&0);
-            let (extrap, verdict, dev) = if last {
-                let d_inf = if pts.len() >= 2 {
-                    let (x0, y0) = pts[0];
-                    let (x1, y1) = pts[1];
-                    y1 - x1 * (y1 - y0) / (x1 - x0)
-                } else {
-                    d
-                };
-                let dev = (d_inf - speedy(rho)) / speedy(rho);
-                let ok = dev.abs() <= 0.08;
-                (
-                    format!("{d_inf:.5}"),
-                    r.check(ok).to_owned(),
-                    format!("{:+.1} %", 100.0 * dev),
-                )
+            let dev = (d - speedy(rho)) / speedy(rho);
+            let verdict = if n == 500 {
+                r.check(dev.abs() <= 0.08).to_owned()
             } else {
-                (String::new(), String::new(), String::new())
+                "(size effect)".to_owned()
             };
             writeln!(
                 w,
-                "| {rho} | {n} | {l:.3} | {d:.5} | {:.5} | {extrap} | {:.5} | {dev} | {verdict} |",
+                "| {rho} | {n} | {l:.3} | {time} | {d:.5} | {:.5} | {:.5} | {:+.1} % | {verdict} |",
                 sum.diffusion_vacf.unwrap_or(f64::NAN),
-                speedy(rho)
+                speedy(rho),
+                100.0 * dev
             )
             .ok();
         }

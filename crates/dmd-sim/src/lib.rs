@@ -57,3 +57,8 @@ pub mod scene;
 pub mod schedule;
 pub mod simulation;
 pub mod sum;
+
+/// The README's example, compiled and run as a doctest so it cannot go stale.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;

@@ -549,10 +549,13 @@ impl Scene {
                 format!("a simulation needs at least 2 bodies, the species count {n}"),
             ));
         }
-        if n >= u64::from(u32::MAX - 1) {
+        if n > crate::neighbour::MAX_BODIES {
             return Err(SceneError::invalid(
                 "species",
-                format!("{n} bodies is more than this dmd can index (2^32 - 2)"),
+                format!(
+                    "{n} bodies is more than this dmd can index (2^27 = {})",
+                    crate::neighbour::MAX_BODIES
+                ),
             ));
         }
         // Pair tables.
