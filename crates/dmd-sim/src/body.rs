@@ -21,8 +21,11 @@ pub struct Body {
     pub v: DVec3,
     /// Species index.
     pub species: u32,
-    /// Packed cell coordinates (see [`cell::pack`](crate::cell::pack)).
-    pub cell: u32,
+    /// Generation: bumped (wrapping) whenever the velocity changes, so that events others
+    /// predicted with this body can tell they are stale. It cannot wrap round to an old value
+    /// while such an event waits: every list is rebuilt at each re-basing of the time origin,
+    /// at most 2³¹ events apart.
+    pub generation: u32,
 }
 
 impl Body {

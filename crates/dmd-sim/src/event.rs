@@ -33,20 +33,74 @@ pub enum Kind {
     Shell,
 }
 
-/// No partner (shell crossings).
-pub const NOBODY: u32 = u32::MAX;
-
-/// One predicted event in a body's list (24 bytes).
+/// One predicted event in a body's list (16 bytes): its time, and a tag packing the kind with
+/// the partner and the partner's generation when the event was predicted.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Event {
     /// When it happens (in the current time frame).
     pub time: f64,
-    /// The partner's generation when the event was predicted.
-    pub partner_gen: u64,
-    /// The partner ([`NOBODY`] for a shell crossing).
-    pub partner: u32,
+    /// Kind in the top 3 bits, partner in the low 27 (see [`neighbour::MAX_BODIES`](crate::neighbour::MAX_BODIES)).
+    tag: u32,
+    /// The partner's generation at prediction.
+    generation: u32,
+}
+
+const PARTNER_BITS: u32 = 27;
+const PARTNER_MASK: u32 = (1 << PARTNER_BITS) - 1;
+const INNER: u32 = 0;
+const OUTER: u32 = 1;
+const SHELL: u32 = 2;
+
+impl Event {
+    /// A pair event with `partner` (at generation `generation`) at `boundary`.
+    #[inline(always)]
+    pub fn pair(time: f64, partner: u32, generation: u32, boundary: Boundary) -> Self {
+        let kind = match boundary {
+            Boundary::Inner => INNER,
+            Boundary::Outer => OUTER,
+        };
+        Event {
+            time,
+            tag: (kind << PARTNER_BITS) | partner,
+            generation,
+        }
+    }
+
+    /// A shell crossing.
+    #[inline(always)]
+    pub fn shell(time: f64) -> Self {
+        Event {
+            time,
+            tag: SHELL << PARTNER_BITS,
+            generation: 0,
+        }
+    }
+
     /// What happens.
-    pub kind: Kind,
+    #[inline(always)]
+    pub fn kind(&self) -> Kind {
+        match self.tag >> PARTNER_BITS {
+            INNER => Kind::Pair(Boundary::Inner),
+            OUTER => Kind::Pair(Boundary::Outer),
+            _ => Kind::Shell,
+        }
+    }
+
+    /// The partner of a pair event.
+    #[inline(always)]
+    pub fn partner(&self) -> Option<u32> {
+        (self.tag >> PARTNER_BITS != SHELL).then_some(self.tag & PARTNER_MASK)
+    }
+
+    /// Whether the event is still valid: a shell crossing always, a pair event while its
+    /// partner is at the generation it was predicted with.
+    #[inline(always)]
+    pub fn is_current(&self, bodies: &[crate::body::Body]) -> bool {
+        match self.partner() {
+            None => true,
+            Some(j) => bodies[j as usize].generation == self.generation,
+        }
+    }
 }
 
 /// Events that belong to the system as a whole (the queue's extra participant).
@@ -73,9 +127,8 @@ pub struct EventLists {
 
 const EMPTY: Event = Event {
     time: f64::INFINITY,
-    partner_gen: 0,
-    partner: NOBODY,
-    kind: Kind::Shell,
+    tag: SHELL << PARTNER_BITS,
+    generation: 0,
 };
 
 impl EventLists {
@@ -123,9 +176,9 @@ impl EventLists {
     }
 
     /// The earliest event of body `i` whose partner is still at the generation it was
-    /// predicted with (`gens`), dropping stale ones on the way; its index in the list.
+    /// predicted with, dropping stale ones on the way; its index in the list.
     #[inline]
-    pub fn earliest(&mut self, i: u32, gens: &[u64]) -> Option<(usize, Event)> {
+    pub fn earliest(&mut self, i: u32, bodies: &[crate::body::Body]) -> Option<(usize, Event)> {
         loop {
             let mut best: Option<(usize, Event)> = None;
             for (k, e) in self.of(i).iter().enumerate() {
@@ -134,7 +187,7 @@ impl EventLists {
                 }
             }
             let (k, e) = best?;
-            if e.partner == NOBODY || gens[e.partner as usize] == e.partner_gen {
+            if e.is_current(bodies) {
                 return Some((k, e));
             }
             self.remove(i, k);
@@ -164,41 +217,57 @@ impl EventLists {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::body::Body;
+    use glam::DVec3;
 
-    fn ev(time: f64, partner: u32, partner_gen: u64) -> Event {
-        Event {
-            time,
-            partner_gen,
-            partner,
-            kind: Kind::Pair(Boundary::Inner),
-        }
+    fn bodies(n: usize) -> Vec<Body> {
+        vec![
+            Body {
+                r: DVec3::ZERO,
+                t: 0.0,
+                v: DVec3::ZERO,
+                species: 0,
+                generation: 0,
+            };
+            n
+        ]
     }
 
     #[test]
-    fn entries_are_small() {
-        assert_eq!(std::mem::size_of::<Event>(), 24);
+    fn entries_are_small_and_round_trip() {
+        assert_eq!(std::mem::size_of::<Event>(), 16);
+        let e = Event::pair(1.5, (1 << 27) - 1, u32::MAX, Boundary::Outer);
+        assert_eq!(e.partner(), Some((1 << 27) - 1));
+        assert_eq!(e.kind(), Kind::Pair(Boundary::Outer));
+        let e = Event::pair(1.5, 0, 3, Boundary::Inner);
+        assert_eq!(
+            (e.partner(), e.kind()),
+            (Some(0), Kind::Pair(Boundary::Inner))
+        );
+        let s = Event::shell(2.0);
+        assert_eq!((s.partner(), s.kind()), (None, Kind::Shell));
     }
 
     #[test]
     fn earliest_skips_stale_partners_and_lists_grow() {
         let mut l = EventLists::new(3);
-        let mut gens = vec![0u64; 3];
+        let mut b = bodies(3);
         for k in 0..20 {
-            l.push(0, ev(10.0 + f64::from(k), 2, 0));
+            l.push(0, Event::pair(10.0 + f64::from(k), 2, 0, Boundary::Inner));
         }
-        l.push(0, ev(3.0, 1, 0));
-        l.push(0, ev(5.0, NOBODY, 0));
+        l.push(0, Event::pair(3.0, 1, 0, Boundary::Inner));
+        l.push(0, Event::shell(5.0));
         assert!(l.capacity() >= 22);
-        assert_eq!(l.earliest(0, &gens).unwrap().1.time, 3.0);
-        gens[1] = 1; // partner 1 changed: its event is stale
-        let (k, e) = l.earliest(0, &gens).unwrap();
+        assert_eq!(l.earliest(0, &b).unwrap().1.time, 3.0);
+        b[1].generation = 1; // partner 1 changed: its event is stale
+        let (k, e) = l.earliest(0, &b).unwrap();
         assert_eq!(e.time, 5.0);
         assert_eq!(l.of(0).len(), 21);
         l.remove(0, k);
-        gens[2] = 7;
-        assert!(l.earliest(0, &gens).is_none());
+        b[2].generation = 7;
+        assert!(l.earliest(0, &b).is_none());
         assert!(l.of(0).is_empty());
-        l.push(1, ev(1.0, 0, 0));
+        l.push(1, Event::pair(1.0, 0, 0, Boundary::Outer));
         assert_eq!(l.of(1)[0].time, 1.0);
         l.clear(1);
         assert!(l.of(1).is_empty());

@@ -22,6 +22,10 @@ use crate::scene::{Positions, QueueKind, Scene, SceneError, ThermostatKind, Ther
 use crate::schedule::Scheduler;
 use crate::simulation::{Andersen, LoopSettings, Progress, SetupError, SimError, Simulation, Stop};
 
+/// Most events between re-basings: generations are `u32` and every event list is rebuilt at a
+/// re-basing, so no generation can wrap round while an event predicted with it waits.
+pub const MAX_REBASE_EVENTS: u64 = 1 << 31;
+
 /// Why a run failed.
 #[derive(Debug, thiserror::Error)]
 pub enum RunError {
@@ -184,7 +188,7 @@ pub fn run_scene(
         rebase_events: scene
             .run
             .rebase_events
-            .unwrap_or_else(|| (100 * n as u64).max(1_000_000)),
+            .unwrap_or_else(|| (100 * n as u64).clamp(1_000_000, MAX_REBASE_EVENTS)),
         seed: scene.seed.wrapping_add(0x7e57_0000_0000_0001),
         debug_check_events: (n as u64).max(1000),
         skin,

@@ -236,7 +236,7 @@ pub struct RunSpec {
     /// Event queue (default `bounded`).
     #[serde(default)]
     pub queue: QueueKind,
-    /// Events between re-basings of the time origin (default 100 N, at least 10⁶).
+    /// Events between re-basings of the time origin (default 100 N, at least 10⁶, at most 2³¹).
     #[serde(default, deserialize_with = "opt_count")]
     pub rebase_events: Option<u64>,
     /// Neighbour-list skin δ, a length (default: chosen from the density, see the user guide).
@@ -676,10 +676,12 @@ impl Scene {
         if let Some(skin) = r.skin {
             positive("run.skin", skin)?;
         }
-        if r.rebase_events == Some(0) {
+        if let Some(k) = r.rebase_events
+            && !(1..=crate::run::MAX_REBASE_EVENTS).contains(&k)
+        {
             return Err(SceneError::invalid(
                 "run.rebase_events",
-                "must be at least 1",
+                format!("must be between 1 and 2^31, got {k}"),
             ));
         }
         // Outputs.

@@ -29,6 +29,10 @@ pub trait Scheduler {
     /// Removes and returns the earliest pending time and its participant.
     fn next(&mut self) -> Option<(u32, f64)>;
 
+    /// The participant that [`next`](Self::next) would return now (stale queue entries in
+    /// front of it are dropped).
+    fn peek(&mut self) -> Option<u32>;
+
     /// Entries held (stale ones included, for queues).
     fn held(&self) -> usize;
 
@@ -64,6 +68,11 @@ where
         self.pop().map(|e| (e.payload.first(), e.time))
     }
 
+    #[inline(always)]
+    fn peek(&mut self) -> Option<u32> {
+        LazyQueue::peek(self).map(|(_, t)| t.first())
+    }
+
     fn held(&self) -> usize {
         self.len()
     }
@@ -94,6 +103,13 @@ impl Scheduler for TournamentTree {
         Some((p as u32, t))
     }
 
+    #[inline(always)]
+    fn peek(&mut self) -> Option<u32> {
+        self.min()
+            .filter(|&(_, t)| t < f64::INFINITY)
+            .map(|(p, _)| p as u32)
+    }
+
     fn held(&self) -> usize {
         self.len()
     }
@@ -113,6 +129,7 @@ mod tests {
         s.set(3, 1.0).unwrap();
         s.set(3, f64::INFINITY).unwrap(); // withdrawn
         assert!(s.set(2, f64::NAN).is_err());
+        assert_eq!(s.peek(), Some(0));
         std::iter::from_fn(|| s.next()).collect()
     }
 
