@@ -475,10 +475,11 @@ impl Context<'_> {
 }
 
 /// The neighbour-list skin: `run.skin`, or by default 0.3 × the Boltzmann mean free path
-/// `1/(√2 π ρ R²)` at the largest reach `R`, kept between R/4 and 2R, and reduced to fit three
-/// cells of `R + 2δ` along the shortest box side. (Measured optimum for hard spheres with
-/// N = 4000: δ ≈ 0.2–0.3 at ρ = 0.5–0.94, 0.5–1 at ρ = 0.1, 1–2 at ρ = 0.01; see
-/// docs/PERFORMANCE.md.)
+/// `1/(√2 π ρ R²)` at the largest reach `R`, kept between R/4 (hard spheres) or R/10 (stepped
+/// potentials) and 2R, and reduced to fit three cells of `R + 2δ` along the shortest box side.
+/// (Measured optima with N = 4000: hard spheres δ ≈ 0.2–0.3 at ρ = 0.5–0.94, 0.5–1 at ρ = 0.1,
+/// 1–2 at ρ = 0.01; square well λ = 1.5 at ρ = 0.5: 0.2; stepped Lennard-Jones at ρ = 0.5:
+/// 0.1 or less; see docs/PERFORMANCE.md.)
 fn choose_skin(
     scene: &Scene,
     potentials: &Potentials,
@@ -517,7 +518,14 @@ fn choose_skin(
     let rho = config.positions.len() as f64 / (l.x * l.y * l.z);
     let mean_free_path =
         1.0 / (std::f64::consts::SQRT_2 * std::f64::consts::PI * rho * reach * reach);
-    let skin = (0.3 * mean_free_path).clamp(0.25 * reach, 2.0 * reach);
+    // Stepped potentials have many more pair events per unit of path than hard spheres, so
+    // list rebuilds are relatively rarer and a thinner skin (fewer candidates) pays.
+    let lower = if potentials.all_hard_spheres() {
+        0.25
+    } else {
+        0.1
+    };
+    let skin = (0.3 * mean_free_path).clamp(lower * reach, 2.0 * reach);
     Ok(skin.min(0.999 * fit))
 }
 
