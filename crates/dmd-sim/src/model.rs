@@ -1,7 +1,7 @@
 //! Interaction models: how a pair's next event is predicted and executed.
 //!
 //! A scene picks its model once and the event loop is compiled for it ([`PairModel`] is a
-//! generic parameter of [`Simulation`](crate::schedule::Simulation), never a trait object):
+//! generic parameter of [`Simulation`](crate::simulation::Simulation), never a trait object):
 //!
 //! - [`HardSpheres`]: every pair table is one infinite step. Nothing is stored per pair; the
 //!   prediction is one quadratic, the execution one reflection.

@@ -164,7 +164,8 @@ impl<P> ChunkList<P> {
     }
 }
 
-/// G. Paul's O(1) priority queue of timed events; see the [module docs](self).
+/// G. Paul's O(1) priority queue of timed events: buckets of width Δ over a time window, a
+/// small heap for the bucket being consumed, an overflow list, automatic tuning ([`Tuning`]).
 ///
 /// ```
 /// use event_queue::{BoundedQueue, EventQueue};

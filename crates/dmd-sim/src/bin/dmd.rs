@@ -73,9 +73,15 @@ impl Reporter for Bar {
         };
         bar.set_style(
             ProgressStyle::with_template(&format!(
-                "{{prefix:>13}} [{{bar:40}}] {{human_pos}}/{{human_len}} {unit} ({{per_sec}}, eta {{eta}})"
+                "{{prefix:>13}} [{{bar:40}}] {{human_pos}}/{{human_len}} {unit} ({{rate}}, eta {{eta}})"
             ))
             .expect("a valid template")
+            .with_key(
+                "rate",
+                |state: &indicatif::ProgressState, w: &mut dyn std::fmt::Write| {
+                    let _ = write!(w, "{:.3e}/s", state.per_sec());
+                },
+            )
             .progress_chars("=> "),
         );
         bar.set_prefix(name.to_owned());
