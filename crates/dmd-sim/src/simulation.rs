@@ -298,6 +298,9 @@ pub struct Simulation<M, S> {
     list2: f64,
     scratch_old: Vec<u32>,
     scratch_new: Vec<u32>,
+    /// Per-body marks for merging neighbour lists (see `shell_event`).
+    marks: Vec<u32>,
+    mark_epoch: u32,
     lists: EventLists,
     model: M,
     sched: S,
@@ -452,6 +455,8 @@ where
             list2,
             scratch_old: Vec::with_capacity(64),
             scratch_new: Vec::with_capacity(64),
+            marks: vec![0; n],
+            mark_epoch: 0,
             lists: EventLists::new(n),
             model,
             sched: S::with_participants(n + 1),
@@ -708,19 +713,34 @@ where
         let mut old = std::mem::take(&mut self.scratch_old);
         old.clear();
         old.extend_from_slice(self.nbrs.of(i));
+        // Merge the old and new lists in linear time with a mark per body:
+        // `epoch << 6 | seen-in-new << 5 | old image code`.
+        self.mark_epoch += 1;
+        if self.mark_epoch >= 1 << 25 {
+            self.marks.fill(0);
+            self.mark_epoch = 1;
+        }
+        let epoch = self.mark_epoch;
+        for &o in &old {
+            self.marks[neighbour::partner(o) as usize] = (epoch << 6) | neighbour::code(o);
+        }
         for &e in &new {
-            if old.contains(&e) {
-                continue; // Same partner, same image: nothing changes for this pair.
-            }
             let (j, code) = (neighbour::partner(e), neighbour::code(e));
-            self.nbrs.upsert(j, i, neighbour::opposite(code));
-            if !old.iter().any(|&o| neighbour::partner(o) == j) {
+            let m = self.marks[j as usize];
+            if m >> 6 == epoch {
+                self.marks[j as usize] = m | 32;
+                if m & 31 == code {
+                    continue; // Same partner, same image: nothing changes for this pair.
+                }
+                self.nbrs.upsert(j, i, neighbour::opposite(code));
+            } else {
+                self.nbrs.upsert(j, i, neighbour::opposite(code));
                 self.predict_pair(i, j, code);
             }
         }
         for &o in &old {
             let j = neighbour::partner(o);
-            if !new.iter().any(|&e| neighbour::partner(e) == j) {
+            if self.marks[j as usize] & 32 == 0 {
                 self.nbrs.remove(j, i);
             }
         }
