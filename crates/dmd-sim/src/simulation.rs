@@ -1455,6 +1455,72 @@ events = 10
         let _ = StepPotential::new(&[[1.0, f64::INFINITY]]);
     }
 
+    /// Two spheres on parallel courses whose centres pass `b` apart: a collision if and only if
+    /// `b < σ`, however close to σ; the grazing impulse is tiny and exact.
+    #[test]
+    fn grazing_collisions_are_decided_by_the_impact_parameter() {
+        for (b, hits) in [
+            (1.0 - 1e-12, true),
+            (1.0 - 1e-15, true),
+            (1.0 + 1e-12, false),
+        ] {
+            let model = HardSpheres::new(hs_potentials(), vec![Particle::new(1.0).unwrap()]);
+            let pos = [DVec3::new(2.0, 5.0, 5.0), DVec3::new(6.0, 5.0 + b, 5.0)];
+            let vel = [DVec3::new(1.0, 0.0, 0.0), DVec3::new(-1.0, 0.0, 0.0)];
+            let mut sim: Simulation<_, LazyQueue<HeapQueue<Ticket>>> =
+                Simulation::new(DVec3::splat(10.0), &pos, &vel, &[0, 0], model, settings())
+                    .unwrap();
+            sim.run(Stop::Time(3.0), &mut NoSampler, &mut |_| {})
+                .unwrap();
+            assert_eq!(sim.counters().core == 1, hits, "b = {b}");
+            assert_eq!(sim.anomalies().total(), 0);
+            let k = sim.kinetic_energy();
+            assert!((k - 1.0).abs() < 1e-15, "b = {b}: K = {k}");
+            sim.check().unwrap();
+            if hits {
+                // The impulse is along the nearly perpendicular line of centres: tiny.
+                let v0 = sim.bodies()[0].v;
+                assert!(v0.x < 1.0 && v0.x > 0.999_99 && v0.y.abs() < 1e-5, "{v0}");
+            }
+        }
+    }
+
+    /// Generations are u32 and wrap; a wrap must not make stale events look current.
+    #[test]
+    fn generations_wrap_safely() {
+        let model = HardSpheres::new(hs_potentials(), vec![Particle::new(1.0).unwrap()]);
+        let mut pos = Vec::new();
+        for x in 0..4 {
+            for y in 0..4 {
+                for z in 0..4 {
+                    pos.push(DVec3::new(f64::from(x), f64::from(y), f64::from(z)) * 1.6 + 0.5);
+                }
+            }
+        }
+        let vel = crate::init::maxwell_boltzmann(&vec![1.0; pos.len()], 1.0, 9);
+        let mut sim: Simulation<_, LazyQueue<HeapQueue<Ticket>>> = Simulation::new(
+            DVec3::splat(6.4),
+            &pos,
+            &vel,
+            &vec![0; pos.len()],
+            model,
+            settings(),
+        )
+        .unwrap();
+        for b in &mut sim.bodies {
+            b.generation = u32::MAX - 3;
+        }
+        sim.predict_all();
+        sim.run(Stop::Events(5000), &mut NoSampler, &mut |_| {})
+            .unwrap();
+        assert!(
+            sim.bodies.iter().any(|b| b.generation < 100),
+            "no generation wrapped"
+        );
+        assert_eq!(sim.anomalies().total(), 0);
+        sim.check().unwrap();
+    }
+
     #[test]
     fn overlapping_start_and_small_box_are_refused() {
         let model = HardSpheres::new(hs_potentials(), vec![Particle::new(1.0).unwrap()]);
