@@ -9,6 +9,8 @@
 //! - the square well λ = 1.5 at ρσ³ = 0.5, kT = 1.5 (N = 4000): stored pair levels;
 //! - the stepped Lennard-Jones fluid of `scenes/stepped-lj.toml` (24 steps, N = 4000).
 //!
+//! Skins are those the default rule of `dmd run` picks (0.25, 0.15 and 0.157).
+//!
 //! Throughput against N (10³ … 10⁶) is measured by the `throughput` example instead: a criterion
 //! sample of a 10⁶-body system would take minutes to set up.
 
@@ -142,7 +144,7 @@ fn stepped(c: &mut Criterion) {
             Stepped::new(sw, part.clone(), 4000),
             0.5,
             1.5,
-            0.375,
+            0.15,
         ),
     );
     // The table of scenes/stepped-lj.toml (ΔV = ε/2, hard core at U = 10ε).
@@ -156,7 +158,7 @@ fn stepped(c: &mut Criterion) {
     bench_system(
         c,
         "stepped_lj_rho0.5",
-        system::<_, LazyQueue<BoundedQueue<Ticket>>>(Stepped::new(lj, part, 4000), 0.5, 1.5, 0.39),
+        system::<_, LazyQueue<BoundedQueue<Ticket>>>(Stepped::new(lj, part, 4000), 0.5, 1.5, 0.157),
     );
 }
 
