@@ -421,7 +421,11 @@ mod tests {
                 match (enter_time(r2, b, v2, radius * radius), w) {
                     (Some(t), Some(w)) => prop_assert!((t - w.enter).abs() <= 1e-9 * (1.0 + t)),
                     (None, Some(w)) => prop_assert!(w.exit < 0.0 || (w.exit - w.enter) < 1e-6),
-                    (Some(t), None) => prop_assert!(false, "entered at {t} but the window is empty"),
+                    (Some(t), None) => {
+                        // Only a course tangent to within round-off may be judged differently.
+                        let closest = (dr + dv * (-b / v2)).length();
+                        prop_assert!((closest - radius).abs() < 1e-9, "entered at {t}, window empty");
+                    }
                     (None, None) => {}
                 }
             } else {
