@@ -211,7 +211,7 @@ fn validate(args: &Args, work: &Path, r: &mut Report) -> Result<(), String> {
     )
     .ok();
     writeln!(w, "|---|---|---|---|---|---|---|---|---|---|---|").ok();
-    let hs_events = if q { "4e6" } else { "3e7" };
+    let hs_events = if q { "2.5e6" } else { "3e7" };
     let mut z_points = Vec::new();
     let mut z_ref_curve = Vec::new();
     for k in 0..=50 {
@@ -437,7 +437,7 @@ fn validate(args: &Args, work: &Path, r: &mut Report) -> Result<(), String> {
     let mut pts = Vec::new();
     for (k, &rho) in low.iter().enumerate() {
         let dir = work.join(format!("sw-low-{k}"));
-        let time = if q { 400.0 } else { 3000.0 };
+        let time = if q { 800.0 } else { 3000.0 };
         let sum = run(
             SW,
             &[
@@ -540,7 +540,7 @@ fn validate(args: &Args, work: &Path, r: &mut Report) -> Result<(), String> {
     )
     .ok();
     writeln!(w, "|---|---|---|---|---|---|").ok();
-    let events = if q { "1e6" } else { "1e7" };
+    let events = if q { "5e5" } else { "1e7" };
     let nve = [
         ("hard spheres ρσ³ = 0.8", HS, vec![s("box.density=0.8")]),
         (
