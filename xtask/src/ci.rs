@@ -10,6 +10,10 @@ use crate::workspace_root;
 /// The test command the README gives a newcomer. `.ci/run` must run exactly this.
 pub(crate) const TEST_COMMAND: &str = "cargo test --workspace";
 
+/// The README's first command, the main job: a `dmd run` of a shipped scene.
+#[cfg(test)]
+pub(crate) const MAIN_COMMAND: &str = "cargo run --release -p dmd-sim --bin dmd -- run scenes/hard-spheres.toml --out out/hard-spheres";
+
 /// One CI step: what it checks, the command line, and extra environment variables.
 pub(crate) type Step = (
     &'static str,
@@ -109,6 +113,28 @@ mod tests {
                 ".ci/run lacks the `{what}` step `{command}` (env {env:?})"
             );
         }
+    }
+
+    #[test]
+    fn readme_starts_with_the_main_command_and_its_scene_exists() {
+        let readme = read("README.md");
+        let first = readme
+            .split("```sh\n")
+            .nth(1)
+            .and_then(|b| b.lines().next())
+            .expect("README.md has a ```sh block");
+        assert_eq!(
+            first, MAIN_COMMAND,
+            "the README's first command is not the main job"
+        );
+        let scene = MAIN_COMMAND
+            .split_whitespace()
+            .find(|w| w.ends_with(".toml"))
+            .expect("the main command names a scene file");
+        assert!(
+            workspace_root().join(scene).is_file(),
+            "the main command's scene {scene} does not exist"
+        );
     }
 
     #[test]

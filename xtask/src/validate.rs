@@ -56,6 +56,14 @@ pub(crate) const CHECKS: &[Check] = &[
         quick: &["--quick"],
     },
     Check {
+        name: "dmd-sim",
+        title: "Simulator: hard spheres and square wells against published references, conservation, determinism",
+        package: "dmd-sim",
+        example: "validate",
+        full: &[],
+        quick: &["--quick"],
+    },
+    Check {
         name: "collide",
         title: "Impulse rules: conservation, constraints, reversibility and cross-check statistics",
         package: "dmd-collide",

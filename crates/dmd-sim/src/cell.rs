@@ -1,0 +1,323 @@
+//! The cell list: the box cut into at least 3 × 3 × 3 cells no thinner than the interaction
+//! reach, so that a body can only interact with bodies in its own and the 26 adjacent cells
+//! (000 §III.B).
+//!
+//! Bodies move between cells only at cell-crossing events, whose times come analytically from
+//! the linear motion of the centre. A cell's bodies are kept in a fixed-stride slot array (one
+//! contiguous run of `cap` slots per cell, `cap` doubling when some cell overflows), so that
+//! scanning a neighbourhood reads a few short contiguous runs instead of chasing a linked list.
+//!
+//! Cell coordinates are packed into one `u32` per body (10 bits per axis, at most 1023 cells
+//! along an axis; larger boxes simply get larger cells).
+
+use glam::DVec3;
+
+/// Most cells along one axis (the packed coordinates have 10 bits each).
+pub const MAX_CELLS_PER_AXIS: u32 = 1023;
+
+/// Packs cell coordinates into one `u32`.
+#[inline(always)]
+pub fn pack(c: [u32; 3]) -> u32 {
+    c[0] | (c[1] << 10) | (c[2] << 20)
+}
+
+/// Unpacks cell coordinates.
+#[inline(always)]
+pub fn unpack(p: u32) -> [u32; 3] {
+    [p & 1023, (p >> 10) & 1023, p >> 20]
+}
+
+/// The grid of cells and which bodies are in each.
+#[derive(Clone, Debug)]
+pub struct CellGrid {
+    /// Cells along each axis (≥ 3).
+    n: [u32; 3],
+    /// Box edge lengths.
+    lengths: DVec3,
+    /// `bounds[a][k]` is the lower face of cell `k` along axis `a`; `bounds[a][n]` is the box
+    /// length exactly (so that a body leaves the last cell exactly at the box face).
+    bounds: [Vec<f64>; 3],
+    /// Slots per cell.
+    cap: usize,
+    /// Bodies in each cell.
+    count: Vec<u32>,
+    /// `slots[cell * cap .. cell * cap + count[cell]]` are the bodies of `cell`.
+    slots: Vec<u32>,
+    /// Position of each body in its cell's slots.
+    slot_of: Vec<u32>,
+}
+
+impl CellGrid {
+    /// A grid for a box of `lengths` with cells at least `reach` wide, for `n_bodies` bodies.
+    /// Returns the number of cells per axis that would be needed if it is below 3.
+    ///
+    /// # Errors
+    /// The axis (0, 1, 2) along which fewer than 3 cells fit.
+    pub fn new(lengths: DVec3, reach: f64, n_bodies: usize) -> Result<Self, usize> {
+        let mut n = [0u32; 3];
+        for a in 0..3 {
+            let fit = (lengths[a] / reach).floor();
+            if fit.is_nan() || fit < 3.0 {
+                return Err(a);
+            }
+            n[a] = fit.min(f64::from(MAX_CELLS_PER_AXIS)) as u32;
+        }
+        let bounds = std::array::from_fn(|a| {
+            let w = lengths[a] / f64::from(n[a]);
+            let mut b: Vec<f64> = (0..n[a]).map(|k| f64::from(k) * w).collect();
+            b.push(lengths[a]);
+            b
+        });
+        let cells = (n[0] as usize) * (n[1] as usize) * (n[2] as usize);
+        let mean = n_bodies.div_ceil(cells.max(1));
+        let cap = (2 * mean + 4).next_power_of_two();
+        Ok(CellGrid {
+            n,
+            lengths,
+            bounds,
+            cap,
+            count: vec![0; cells],
+            slots: vec![u32::MAX; cells * cap],
+            slot_of: vec![u32::MAX; n_bodies],
+        })
+    }
+
+    /// Cells along each axis.
+    pub fn dims(&self) -> [u32; 3] {
+        self.n
+    }
+
+    /// The box.
+    pub fn lengths(&self) -> DVec3 {
+        self.lengths
+    }
+
+    /// Total number of cells.
+    pub fn n_cells(&self) -> usize {
+        self.count.len()
+    }
+
+    /// Slots per cell (grows when a cell overflows).
+    pub fn capacity(&self) -> usize {
+        self.cap
+    }
+
+    /// The linear index of packed coordinates.
+    #[inline(always)]
+    pub fn linear(&self, packed: u32) -> usize {
+        let [x, y, z] = unpack(packed);
+        (x + self.n[0] * (y + self.n[1] * z)) as usize
+    }
+
+    /// The cell holding `r` (any position; wrapped into the box first).
+    pub fn locate(&self, r: DVec3) -> u32 {
+        let mut c = [0u32; 3];
+        for a in 0..3 {
+            let l = self.lengths[a];
+            let x = r[a].rem_euclid(l);
+            let b = &self.bounds[a];
+            // partition_point: first face above x, minus one.
+            let k = b[..self.n[a] as usize].partition_point(|&f| f <= x);
+            c[a] = (k.max(1) - 1) as u32;
+        }
+        pack(c)
+    }
+
+    /// Lower and upper faces of cell coordinate `k` along `axis`.
+    #[inline(always)]
+    pub fn faces(&self, axis: usize, k: u32) -> (f64, f64) {
+        let b = &self.bounds[axis];
+        (b[k as usize], b[k as usize + 1])
+    }
+
+    /// The bodies of a cell (by linear index).
+    #[inline(always)]
+    pub fn bodies(&self, cell: usize) -> &[u32] {
+        let base = cell * self.cap;
+        &self.slots[base..base + self.count[cell] as usize]
+    }
+
+    /// Puts body `i` into cell `packed`.
+    pub fn insert(&mut self, i: u32, packed: u32) {
+        let cell = self.linear(packed);
+        if self.count[cell] as usize == self.cap {
+            self.grow();
+        }
+        let k = self.count[cell] as usize;
+        self.slots[cell * self.cap + k] = i;
+        self.slot_of[i as usize] = k as u32;
+        self.count[cell] += 1;
+    }
+
+    /// Takes body `i` out of cell `packed` (where it must be).
+    pub fn remove(&mut self, i: u32, packed: u32) {
+        let cell = self.linear(packed);
+        let base = cell * self.cap;
+        let k = self.slot_of[i as usize] as usize;
+        debug_assert_eq!(self.slots[base + k], i, "body {i} is not in cell {cell}");
+        let last = self.count[cell] as usize - 1;
+        let moved = self.slots[base + last];
+        self.slots[base + k] = moved;
+        self.slot_of[moved as usize] = k as u32;
+        self.slots[base + last] = u32::MAX;
+        self.count[cell] -= 1;
+    }
+
+    /// Doubles the slots per cell (rare: a cell holds more bodies than ever before).
+    #[cold]
+    fn grow(&mut self) {
+        let new_cap = self.cap * 2;
+        let mut slots = vec![u32::MAX; self.count.len() * new_cap];
+        for (cell, &c) in self.count.iter().enumerate() {
+            let c = c as usize;
+            slots[cell * new_cap..cell * new_cap + c]
+                .copy_from_slice(&self.slots[cell * self.cap..cell * self.cap + c]);
+        }
+        self.slots = slots;
+        self.cap = new_cap;
+    }
+
+    /// The three cell coordinates along `axis` adjacent to (and including) `k`, each with the
+    /// shift to add to a position in that cell to bring it next to cell `k` (periodic images).
+    #[inline(always)]
+    pub fn axis_neighbours(&self, axis: usize, k: u32) -> [(u32, f64); 3] {
+        let n = self.n[axis];
+        let l = self.lengths[axis];
+        let below = if k == 0 { (n - 1, -l) } else { (k - 1, 0.0) };
+        let above = if k + 1 == n { (0, l) } else { (k + 1, 0.0) };
+        [below, (k, 0.0), above]
+    }
+
+    /// The neighbour cell across the face `dir` (−1 or +1) of coordinate `k` along `axis`, and
+    /// the shift of positions in it (as [`axis_neighbours`](Self::axis_neighbours)).
+    #[inline(always)]
+    pub fn step(&self, axis: usize, k: u32, up: bool) -> (u32, f64) {
+        let [below, _, above] = self.axis_neighbours(axis, k);
+        if up { above } else { below }
+    }
+
+    /// Calls `f(cell, shift)` for the 27 cells around packed cell `c` (itself included).
+    #[inline(always)]
+    pub fn for_each_neighbour_cell(&self, c: u32, mut f: impl FnMut(usize, DVec3)) {
+        let [x, y, z] = unpack(c);
+        let xs = self.axis_neighbours(0, x);
+        let ys = self.axis_neighbours(1, y);
+        let zs = self.axis_neighbours(2, z);
+        for &(cz, sz) in &zs {
+            for &(cy, sy) in &ys {
+                let row = self.n[0] * (cy + self.n[1] * cz);
+                for &(cx, sx) in &xs {
+                    f((cx + row) as usize, DVec3::new(sx, sy, sz));
+                }
+            }
+        }
+    }
+
+    /// Calls `f(cell, shift)` for the 9 cells that became adjacent when a body moved into
+    /// packed cell `c` across a face along `axis` in direction `up`: the layer beyond `c`.
+    #[inline(always)]
+    pub fn for_each_new_neighbour_cell(
+        &self,
+        c: u32,
+        axis: usize,
+        up: bool,
+        mut f: impl FnMut(usize, DVec3),
+    ) {
+        let k = unpack(c);
+        let mut lists = [
+            self.axis_neighbours(0, k[0]),
+            self.axis_neighbours(1, k[1]),
+            self.axis_neighbours(2, k[2]),
+        ];
+        let layer = self.step(axis, k[axis], up);
+        lists[axis] = [layer, layer, layer];
+        let [xs, ys, zs] = lists;
+        let (nz, ny, nx) = match axis {
+            0 => (3, 3, 1),
+            1 => (3, 1, 3),
+            _ => (1, 3, 3),
+        };
+        for &(cz, sz) in &zs[..nz] {
+            for &(cy, sy) in &ys[..ny] {
+                let row = self.n[0] * (cy + self.n[1] * cz);
+                for &(cx, sx) in &xs[..nx] {
+                    f((cx + row) as usize, DVec3::new(sx, sy, sz));
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn small_boxes_are_refused_per_axis() {
+        assert_eq!(
+            CellGrid::new(DVec3::new(10.0, 2.9, 10.0), 1.0, 10).unwrap_err(),
+            1
+        );
+        let g = CellGrid::new(DVec3::new(10.0, 3.0, 7.5), 1.0, 10).unwrap();
+        assert_eq!(g.dims(), [10, 3, 7]);
+    }
+
+    #[test]
+    fn locate_insert_remove_and_grow() {
+        let mut g = CellGrid::new(DVec3::splat(4.0), 1.0, 100).unwrap();
+        let c = g.locate(DVec3::new(3.999, 0.0, -0.5));
+        assert_eq!(unpack(c), [3, 0, 3]);
+        assert_eq!(unpack(g.locate(DVec3::new(4.0, 1.0, 2.5))), [0, 1, 2]);
+        let cap = g.capacity();
+        for i in 0..(cap as u32 + 3) {
+            g.insert(i, c);
+        }
+        assert!(g.capacity() > cap);
+        let cell = g.linear(c);
+        assert_eq!(g.bodies(cell).len(), cap + 3);
+        g.remove(0, c);
+        g.remove(5, c);
+        let mut left: Vec<u32> = g.bodies(cell).to_vec();
+        left.sort_unstable();
+        let expect: Vec<u32> = (1..(cap as u32 + 3)).filter(|&i| i != 5).collect();
+        assert_eq!(left, expect);
+    }
+
+    #[test]
+    fn neighbourhoods_are_27_distinct_cells_with_periodic_shifts() {
+        let g = CellGrid::new(DVec3::new(3.0, 4.0, 5.0), 1.0, 1).unwrap();
+        let mut seen = Vec::new();
+        g.for_each_neighbour_cell(pack([0, 3, 2]), |cell, shift| seen.push((cell, shift)));
+        assert_eq!(seen.len(), 27);
+        let mut cells: Vec<usize> = seen.iter().map(|s| s.0).collect();
+        cells.sort_unstable();
+        cells.dedup();
+        assert_eq!(cells.len(), 27);
+        // The cell below x = 0 is x = 2 with shift −3; above y = 3 is y = 0 with shift +4.
+        let below_x = g.linear(pack([2, 3, 2]));
+        assert!(
+            seen.iter()
+                .any(|&(c, s)| c == below_x && s == DVec3::new(-3.0, 0.0, 0.0))
+        );
+        let above_y = g.linear(pack([0, 0, 2]));
+        assert!(
+            seen.iter()
+                .any(|&(c, s)| c == above_y && s == DVec3::new(0.0, 4.0, 0.0))
+        );
+        // Moving up along z into (0, 3, 4) brings the layer z = 0 (shift +5) into reach.
+        let mut layer = Vec::new();
+        g.for_each_new_neighbour_cell(pack([0, 3, 4]), 2, true, |c, s| layer.push((c, s)));
+        assert_eq!(layer.len(), 9);
+        assert!(
+            layer
+                .iter()
+                .all(|&(c, s)| unpack_linear(&g, c)[2] == 0 && s.z == 5.0)
+        );
+    }
+
+    fn unpack_linear(g: &CellGrid, c: usize) -> [u32; 3] {
+        let [nx, ny, _] = g.dims();
+        let c = c as u32;
+        [c % nx, (c / nx) % ny, c / (nx * ny)]
+    }
+}

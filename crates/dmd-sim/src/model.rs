@@ -1,0 +1,451 @@
+//! Interaction models: how a pair's next event is predicted and executed.
+//!
+//! A scene picks its model once and the event loop is compiled for it ([`PairModel`] is a
+//! generic parameter of [`Simulation`](crate::simulation::Simulation), never a trait object):
+//!
+//! - [`HardSpheres`]: every pair table is one infinite step. Nothing is stored per pair; the
+//!   prediction is one quadratic, the execution one reflection.
+//! - [`Stepped`]: general staircases (square wells, stepped Lennard-Jones, soft steps, mixtures).
+//!   The level of every interacting pair is stored ([`PairStates`]); a prediction solves the
+//!   quadratic of the one or two boundaries of the pair's level.
+//!
+//! Both give **analytic** event times: the relative centre moves on a straight line between
+//! events, so reaching radius `R` solves `v² t² + 2 b t + (r² − R²) = 0`, `b = r·v`. Each root is
+//! taken in the form without cancellation (`c / (−b + √D)` entering, `−c / (b + √D)` leaving
+//! while receding), as in `root_search::sphere_window`, which the tests use as the reference.
+//! A rigid-body model (issue 7) implements the same trait with root searches bracketed by the
+//! reach sphere, and may return virtual events.
+
+use collide::{Outcome, Particle, spheres};
+use glam::DVec3;
+
+use crate::event::Boundary;
+use crate::pair_state::PairStates;
+use crate::potential::{Level, Potentials};
+
+/// What executing a pair event did.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PairClass {
+    /// Reflection at a hard core.
+    Core,
+    /// Crossed a finite step inwards.
+    StepIn,
+    /// Crossed a finite step outwards.
+    StepOut,
+    /// Reflected by a finite step (not enough kinetic energy to climb it).
+    StepReflect,
+    /// Nothing done: the pair was found moving away from the boundary it was to cross (a
+    /// grazing event decided by round-off). Counted as an anomaly.
+    Skipped,
+}
+
+/// The result of a pair event.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Executed {
+    /// What happened.
+    pub class: PairClass,
+    /// Potential energy gained by the pair.
+    pub delta_u: f64,
+    /// `r_ij · Δp_i`: the pair's contribution to the collision virial.
+    pub virial: f64,
+    /// The pair was inside a hard core by more than round-off.
+    pub overlap: bool,
+}
+
+/// Relative tolerance on squared distances below which an overlap counts as round-off.
+pub const OVERLAP_TOLERANCE: f64 = 1e-9;
+
+/// An interaction model for the event loop.
+pub trait PairModel {
+    /// The largest distance at which two bodies interact (the smallest cell side).
+    fn reach(&self) -> f64;
+
+    /// The particle (mass) of species `s`.
+    fn particle(&self, s: u32) -> &Particle;
+
+    /// The next event of pair `(i, j)`, of species `(si, sj)`, whose relative position and
+    /// velocity are `dr = r_i − r_j` and `dv = v_i − v_j` now: the time from now and the
+    /// boundary.
+    fn predict(
+        &self,
+        i: u32,
+        j: u32,
+        si: u32,
+        sj: u32,
+        dr: DVec3,
+        dv: DVec3,
+    ) -> Option<(f64, Boundary)>;
+
+    /// Executes a pair event at separation `dr = r_i − r_j`, updating the velocities and the
+    /// stored pair state.
+    ///
+    /// # Errors
+    /// The impulse rule's error for a non-finite state (a broken invariant upstream).
+    #[allow(clippy::too_many_arguments)]
+    fn execute(
+        &mut self,
+        i: u32,
+        j: u32,
+        si: u32,
+        sj: u32,
+        boundary: Boundary,
+        dr: DVec3,
+        vi: &mut DVec3,
+        vj: &mut DVec3,
+    ) -> Result<Executed, collide::CollideError>;
+
+    /// The stored level of pair `(i, j)` (0 for models that store none).
+    fn level(&self, i: u32, j: u32) -> u16;
+
+    /// Sets the stored level (initial configuration).
+    fn set_level(&mut self, i: u32, j: u32, level: u16);
+
+    /// The potentials.
+    fn potentials(&self) -> &Potentials;
+}
+
+/// Roots of `|dr + dv t|² = R²` for an approaching pair entering the sphere: the earliest
+/// `t ≥ 0`, or `None` if the pair misses it.
+#[inline(always)]
+fn enter_time(r2: f64, b: f64, v2: f64, radius2: f64) -> Option<f64> {
+    if b >= 0.0 {
+        return None;
+    }
+    let c = r2 - radius2;
+    let disc = b * b - v2 * c;
+    if disc <= 0.0 {
+        return None;
+    }
+    Some((c / (-b + disc.sqrt())).max(0.0))
+}
+
+/// The time at which a pair inside a sphere of squared radius `radius2` leaves it.
+#[inline(always)]
+fn exit_time(r2: f64, b: f64, v2: f64, radius2: f64) -> Option<f64> {
+    if v2 == 0.0 {
+        return None;
+    }
+    let c = r2 - radius2;
+    let disc = (b * b - v2 * c).max(0.0);
+    let t = if b > 0.0 {
+        -c / (b + disc.sqrt())
+    } else {
+        (-b + disc.sqrt()) / v2
+    };
+    Some(t.max(0.0))
+}
+
+/// The next boundary event of a pair on `level`.
+#[inline(always)]
+fn predict_level(level: &Level, r2: f64, b: f64, v2: f64) -> Option<(f64, Boundary)> {
+    if level.inner2 > 0.0
+        && let Some(t) = enter_time(r2, b, v2, level.inner2)
+    {
+        return Some((t, Boundary::Inner));
+    }
+    if level.outer2 < f64::INFINITY {
+        return exit_time(r2, b, v2, level.outer2).map(|t| (t, Boundary::Outer));
+    }
+    None
+}
+
+/// Hard spheres (and hard-sphere mixtures): one infinite step per pair, nothing stored.
+#[derive(Clone, Debug)]
+pub struct HardSpheres {
+    n_species: usize,
+    /// Squared contact distance per species pair.
+    sigma2: Vec<f64>,
+    particles: Vec<Particle>,
+    potentials: Potentials,
+}
+
+impl HardSpheres {
+    /// From the potentials (all bare hard cores) and the species masses.
+    pub fn new(potentials: Potentials, particles: Vec<Particle>) -> Self {
+        assert!(potentials.all_hard_spheres());
+        let n = potentials.n_species();
+        let sigma2 = (0..n * n)
+            .map(|k| {
+                let d = potentials
+                    .get((k / n) as u32, (k % n) as u32)
+                    .core()
+                    .expect("hard core");
+                d * d
+            })
+            .collect();
+        HardSpheres {
+            n_species: n,
+            sigma2,
+            particles,
+            potentials,
+        }
+    }
+}
+
+impl PairModel for HardSpheres {
+    fn reach(&self) -> f64 {
+        self.potentials.reach()
+    }
+
+    #[inline(always)]
+    fn particle(&self, s: u32) -> &Particle {
+        &self.particles[s as usize]
+    }
+
+    #[inline(always)]
+    fn predict(
+        &self,
+        _i: u32,
+        _j: u32,
+        si: u32,
+        sj: u32,
+        dr: DVec3,
+        dv: DVec3,
+    ) -> Option<(f64, Boundary)> {
+        let b = dr.dot(dv);
+        if b >= 0.0 {
+            return None;
+        }
+        let sigma2 = self.sigma2[si as usize * self.n_species + sj as usize];
+        enter_time(dr.length_squared(), b, dv.length_squared(), sigma2)
+            .map(|t| (t, Boundary::Inner))
+    }
+
+    #[inline(always)]
+    fn execute(
+        &mut self,
+        _i: u32,
+        _j: u32,
+        si: u32,
+        sj: u32,
+        boundary: Boundary,
+        dr: DVec3,
+        vi: &mut DVec3,
+        vj: &mut DVec3,
+    ) -> Result<Executed, collide::CollideError> {
+        debug_assert_eq!(boundary, Boundary::Inner);
+        let r2 = dr.length_squared();
+        let sigma2 = self.sigma2[si as usize * self.n_species + sj as usize];
+        let overlap = r2 < sigma2 * (1.0 - OVERLAP_TOLERANCE);
+        if dr.dot(*vi - *vj) >= 0.0 {
+            return Ok(Executed {
+                class: PairClass::Skipped,
+                delta_u: 0.0,
+                virial: 0.0,
+                overlap,
+            });
+        }
+        let out = spheres(
+            &self.particles[si as usize],
+            &self.particles[sj as usize],
+            *vi,
+            *vj,
+            dr,
+            f64::INFINITY,
+        )?;
+        *vi = out.i;
+        *vj = out.j;
+        Ok(Executed {
+            class: PairClass::Core,
+            delta_u: 0.0,
+            virial: out.impulse.s * r2,
+            overlap,
+        })
+    }
+
+    fn level(&self, _i: u32, _j: u32) -> u16 {
+        0
+    }
+
+    fn set_level(&mut self, _i: u32, _j: u32, level: u16) {
+        debug_assert_eq!(level, 0, "hard spheres have no levels but 0");
+    }
+
+    fn potentials(&self) -> &Potentials {
+        &self.potentials
+    }
+}
+
+/// General stepped potentials with stored pair levels.
+#[derive(Clone, Debug)]
+pub struct Stepped {
+    potentials: Potentials,
+    particles: Vec<Particle>,
+    states: PairStates,
+}
+
+impl Stepped {
+    /// From the potentials and species masses, for `n` bodies (all pairs on level 0).
+    pub fn new(potentials: Potentials, particles: Vec<Particle>, n: usize) -> Self {
+        Stepped {
+            potentials,
+            particles,
+            states: PairStates::new(n),
+        }
+    }
+
+    /// The stored pair levels.
+    pub fn states(&self) -> &PairStates {
+        &self.states
+    }
+}
+
+impl PairModel for Stepped {
+    fn reach(&self) -> f64 {
+        self.potentials.reach()
+    }
+
+    #[inline(always)]
+    fn particle(&self, s: u32) -> &Particle {
+        &self.particles[s as usize]
+    }
+
+    #[inline(always)]
+    fn predict(
+        &self,
+        i: u32,
+        j: u32,
+        si: u32,
+        sj: u32,
+        dr: DVec3,
+        dv: DVec3,
+    ) -> Option<(f64, Boundary)> {
+        let levels = self.potentials.get(si, sj).levels();
+        let r2 = dr.length_squared();
+        let b = dr.dot(dv);
+        let reach2 = levels[0].inner2;
+        // Beyond the reach (by more than round-off) a pair is on level 0: no look-up.
+        let level = if r2 > reach2 * (1.0 + OVERLAP_TOLERANCE) {
+            if b >= 0.0 {
+                return None;
+            }
+            0
+        } else {
+            self.states.get(i, j) as usize
+        };
+        predict_level(&levels[level], r2, b, dv.length_squared())
+    }
+
+    fn execute(
+        &mut self,
+        i: u32,
+        j: u32,
+        si: u32,
+        sj: u32,
+        boundary: Boundary,
+        dr: DVec3,
+        vi: &mut DVec3,
+        vj: &mut DVec3,
+    ) -> Result<Executed, collide::CollideError> {
+        let level = self.states.get(i, j);
+        let l = self.potentials.get(si, sj).levels()[level as usize];
+        let r2 = dr.length_squared();
+        let b = dr.dot(*vi - *vj);
+        let (step, moving_right_way) = match boundary {
+            Boundary::Inner => (l.dv_in, b < 0.0),
+            Boundary::Outer => (l.dv_out, b > 0.0),
+        };
+        let overlap = step == f64::INFINITY && r2 < l.inner2 * (1.0 - OVERLAP_TOLERANCE);
+        if !moving_right_way {
+            return Ok(Executed {
+                class: PairClass::Skipped,
+                delta_u: 0.0,
+                virial: 0.0,
+                overlap,
+            });
+        }
+        let out = spheres(
+            &self.particles[si as usize],
+            &self.particles[sj as usize],
+            *vi,
+            *vj,
+            dr,
+            step,
+        )?;
+        *vi = out.i;
+        *vj = out.j;
+        let class = match (out.impulse.outcome, boundary) {
+            (Outcome::Reflected, _) if step == f64::INFINITY => PairClass::Core,
+            (Outcome::Reflected, _) => PairClass::StepReflect,
+            (Outcome::Crossed, Boundary::Inner) => {
+                self.states.set(i, j, level + 1);
+                PairClass::StepIn
+            }
+            (Outcome::Crossed, Boundary::Outer) => {
+                self.states.set(i, j, level - 1);
+                PairClass::StepOut
+            }
+        };
+        Ok(Executed {
+            class,
+            delta_u: out.impulse.delta_v,
+            virial: out.impulse.s * r2,
+            overlap,
+        })
+    }
+
+    #[inline(always)]
+    fn level(&self, i: u32, j: u32) -> u16 {
+        self.states.get(i, j)
+    }
+
+    fn set_level(&mut self, i: u32, j: u32, level: u16) {
+        self.states.set(i, j, level);
+    }
+
+    fn potentials(&self) -> &Potentials {
+        &self.potentials
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+    use root_search::sphere_window;
+
+    proptest! {
+        /// The analytic times agree with the reference bracket of `root_search`.
+        #[test]
+        fn event_times_match_sphere_window(
+            r in prop::array::uniform3(-3.0f64..3.0),
+            v in prop::array::uniform3(-2.0f64..2.0),
+            radius in 0.5f64..2.0,
+        ) {
+            let dr = DVec3::from(r);
+            let dv = DVec3::from(v);
+            prop_assume!(dv.length() > 1e-3);
+            let (r2, b, v2) = (dr.length_squared(), dr.dot(dv), dv.length_squared());
+            let w = sphere_window(r, v, radius).unwrap();
+            if r2 > radius * radius {
+                match (enter_time(r2, b, v2, radius * radius), w) {
+                    (Some(t), Some(w)) => prop_assert!((t - w.enter).abs() <= 1e-9 * (1.0 + t)),
+                    (None, Some(w)) => prop_assert!(w.exit < 0.0 || (w.exit - w.enter) < 1e-6),
+                    (Some(t), None) => {
+                        // Only a course tangent to within round-off may be judged differently.
+                        let closest = (dr + dv * (-b / v2)).length();
+                        prop_assert!((closest - radius).abs() < 1e-9, "entered at {t}, window empty");
+                    }
+                    (None, None) => {}
+                }
+            } else {
+                let t = exit_time(r2, b, v2, radius * radius).unwrap();
+                let w = w.unwrap();
+                prop_assert!((t - w.exit).abs() <= 1e-9 * (1.0 + t));
+            }
+        }
+    }
+
+    #[test]
+    fn grazing_and_far_pairs() {
+        // Exactly tangent course, r = (−2, 1, 0), v = (1, 0, 0), R = 1: no collision (D = 0).
+        assert_eq!(enter_time(5.0, -2.0, 1.0, 1.0), None);
+        // Receding pair never enters.
+        assert_eq!(enter_time(4.0, 0.5, 1.0, 1.0), None);
+        // Inside by round-off while approaching: the event is now.
+        assert_eq!(enter_time(1.0 - 1e-16, -1.0, 1.0, 1.0), Some(0.0));
+        // Leaving while approaching: the far side of the sphere.
+        let t = exit_time(0.25, -0.5, 1.0, 2.25).unwrap();
+        assert!((t - 2.0).abs() < 1e-15);
+    }
+}

@@ -1,0 +1,360 @@
+//! Observables sampled at fixed intervals of simulated time: radial distribution function,
+//! mean-square displacement, velocity autocorrelation, pressure and energy time series.
+//!
+//! Sampling reads positions `r + v (t − t_i)` without touching the bodies (no invalidation):
+//! asking for observables does not change the trajectory, and nothing here runs unless asked.
+
+use glam::DVec3;
+
+use crate::simulation::{Sampler, View};
+
+/// Radial distribution function `g(r)` of all pairs.
+#[derive(Clone, Debug)]
+pub struct Rdf {
+    every: u64,
+    seen: u64,
+    r_max: f64,
+    width: f64,
+    counts: Vec<u64>,
+    samples: u64,
+    n: usize,
+    volume: f64,
+}
+
+impl Rdf {
+    /// `bins` bins up to `r_max` (at most half the smallest box side), evaluated at every
+    /// `every`-th sample.
+    pub fn new(bins: usize, r_max: f64, every: u64) -> Self {
+        Rdf {
+            every: every.max(1),
+            seen: 0,
+            r_max,
+            width: r_max / bins as f64,
+            counts: vec![0; bins],
+            samples: 0,
+            n: 0,
+            volume: 0.0,
+        }
+    }
+
+    fn sample(&mut self, view: &View<'_>) {
+        self.seen += 1;
+        if !(self.seen - 1).is_multiple_of(self.every) {
+            return;
+        }
+        let n = view.bodies.len();
+        let pos: Vec<DVec3> = (0..n)
+            .map(|i| wrap(view.position(i), view.lengths))
+            .collect();
+        let l = view.lengths;
+        self.n = n;
+        self.volume = l.x * l.y * l.z;
+        self.samples += 1;
+        let r2max = self.r_max * self.r_max;
+        let inv_w = 1.0 / self.width;
+        let add = |d: DVec3, counts: &mut [u64]| {
+            let r2 = d.length_squared();
+            if r2 < r2max {
+                let k = (r2.sqrt() * inv_w) as usize;
+                if let Some(c) = counts.get_mut(k) {
+                    *c += 1;
+                }
+            }
+        };
+        // A grid of cells at least r_max wide when three fit along every axis, else all pairs.
+        let dims: [usize; 3] =
+            std::array::from_fn(|a| ((l[a] / self.r_max).floor() as usize).max(1));
+        if dims.iter().all(|&d| d >= 3) {
+            let idx = |p: DVec3| -> [usize; 3] {
+                std::array::from_fn(|a| {
+                    (((p[a] / l[a]) * dims[a] as f64) as usize).min(dims[a] - 1)
+                })
+            };
+            let n_cells = dims[0] * dims[1] * dims[2];
+            let lin = |c: [usize; 3]| c[0] + dims[0] * (c[1] + dims[1] * c[2]);
+            let mut head = vec![usize::MAX; n_cells];
+            let mut next = vec![usize::MAX; n];
+            for (i, &p) in pos.iter().enumerate() {
+                let c = lin(idx(p));
+                next[i] = head[c];
+                head[c] = i;
+            }
+            for (i, &p) in pos.iter().enumerate() {
+                let c = idx(p);
+                for dz in [dims[2] - 1, 0, 1] {
+                    for dy in [dims[1] - 1, 0, 1] {
+                        for dx in [dims[0] - 1, 0, 1] {
+                            let nc = [
+                                (c[0] + dx) % dims[0],
+                                (c[1] + dy) % dims[1],
+                                (c[2] + dz) % dims[2],
+                            ];
+                            let mut j = head[lin(nc)];
+                            while j != usize::MAX {
+                                if j > i {
+                                    add(min_image(p - pos[j], l), &mut self.counts);
+                                }
+                                j = next[j];
+                            }
+                        }
+                    }
+                }
+            }
+        } else {
+            for i in 0..n {
+                for j in i + 1..n {
+                    add(min_image(pos[i] - pos[j], l), &mut self.counts);
+                }
+            }
+        }
+    }
+
+    /// Rows `(r at bin centre, g(r))`.
+    pub fn table(&self) -> Vec<(f64, f64)> {
+        let n = self.n as f64;
+        let rho = (n - 1.0) / self.volume;
+        self.counts
+            .iter()
+            .enumerate()
+            .map(|(k, &c)| {
+                let (a, b) = (k as f64 * self.width, (k + 1) as f64 * self.width);
+                let shell = 4.0 / 3.0 * std::f64::consts::PI * (b * b * b - a * a * a);
+                let ideal = 0.5 * n * rho * shell * self.samples as f64;
+                (
+                    0.5 * (a + b),
+                    if ideal > 0.0 { c as f64 / ideal } else { 0.0 },
+                )
+            })
+            .collect()
+    }
+}
+
+fn wrap(p: DVec3, l: DVec3) -> DVec3 {
+    DVec3::new(
+        p.x.rem_euclid(l.x),
+        p.y.rem_euclid(l.y),
+        p.z.rem_euclid(l.z),
+    )
+}
+
+fn min_image(mut d: DVec3, l: DVec3) -> DVec3 {
+    for a in 0..3 {
+        d[a] -= l[a] * (d[a] / l[a]).round();
+    }
+    d
+}
+
+/// One time origin of the correlations.
+#[derive(Clone, Debug)]
+struct Origin {
+    sample: u64,
+    r0: Vec<DVec3>,
+    v0: Vec<DVec3>,
+}
+
+/// Mean-square displacement and velocity autocorrelation over sliding time origins.
+#[derive(Clone, Debug)]
+pub struct Correlations {
+    dt: f64,
+    lags: usize,
+    origin_every: u64,
+    samples: u64,
+    origins: Vec<Origin>,
+    msd: Vec<f64>,
+    vacf: Vec<f64>,
+    counts: Vec<u64>,
+    want_msd: bool,
+    want_vacf: bool,
+}
+
+impl Correlations {
+    /// Lags `0, dt, …` up to `max_lag`; a new time origin every `max_lag / 10` (at least every
+    /// sample).
+    pub fn new(dt: f64, max_lag: f64, want_msd: bool, want_vacf: bool) -> Self {
+        let lags = (max_lag / dt).round().max(1.0) as usize + 1;
+        let origin_every = ((lags - 1) / 10).max(1) as u64;
+        Correlations {
+            dt,
+            lags,
+            origin_every,
+            samples: 0,
+            origins: Vec::new(),
+            msd: vec![0.0; lags],
+            vacf: vec![0.0; lags],
+            counts: vec![0; lags],
+            want_msd,
+            want_vacf,
+        }
+    }
+
+    fn sample(&mut self, view: &View<'_>) {
+        let n = view.bodies.len();
+        let k = self.samples;
+        self.samples += 1;
+        if k.is_multiple_of(self.origin_every) {
+            self.origins.push(Origin {
+                sample: k,
+                r0: (0..n).map(|i| view.unwrapped(i)).collect(),
+                v0: view.bodies.iter().map(|b| b.v).collect(),
+            });
+        }
+        let lags = self.lags as u64;
+        self.origins.retain(|o| k - o.sample < lags);
+        let now: Vec<DVec3> = (0..n).map(|i| view.unwrapped(i)).collect();
+        for o in &self.origins {
+            let lag = (k - o.sample) as usize;
+            let (mut m, mut c) = (0.0, 0.0);
+            for (i, b) in view.bodies.iter().enumerate() {
+                m += (now[i] - o.r0[i]).length_squared();
+                c += b.v.dot(o.v0[i]);
+            }
+            self.msd[lag] += m / n as f64;
+            self.vacf[lag] += c / n as f64;
+            self.counts[lag] += 1;
+        }
+    }
+
+    /// Rows `(lag, MSD)` of the lags with data.
+    pub fn msd_table(&self) -> Vec<(f64, f64)> {
+        self.table(&self.msd)
+    }
+
+    /// Rows `(lag, ⟨v(0)·v(t)⟩)` of the lags with data.
+    pub fn vacf_table(&self) -> Vec<(f64, f64)> {
+        self.table(&self.vacf)
+    }
+
+    fn table(&self, acc: &[f64]) -> Vec<(f64, f64)> {
+        (0..self.lags)
+            .filter(|&k| self.counts[k] > 0)
+            .map(|k| (k as f64 * self.dt, acc[k] / self.counts[k] as f64))
+            .collect()
+    }
+
+    /// Whether the MSD was asked for.
+    pub fn wants_msd(&self) -> bool {
+        self.want_msd
+    }
+
+    /// Whether the VACF was asked for.
+    pub fn wants_vacf(&self) -> bool {
+        self.want_vacf
+    }
+
+    /// Self-diffusion coefficient from the slope of the MSD over the second half of the lags
+    /// (least squares), `D = slope / 6`.
+    pub fn diffusion_from_msd(&self) -> Option<f64> {
+        let t = self.msd_table();
+        let half: Vec<(f64, f64)> = t[t.len() / 2..].to_vec();
+        if half.len() < 2 {
+            return None;
+        }
+        let n = half.len() as f64;
+        let mx = half.iter().map(|p| p.0).sum::<f64>() / n;
+        let my = half.iter().map(|p| p.1).sum::<f64>() / n;
+        let sxy: f64 = half.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+        let sxx: f64 = half.iter().map(|p| (p.0 - mx).powi(2)).sum();
+        (sxx > 0.0).then(|| sxy / sxx / 6.0)
+    }
+
+    /// Self-diffusion coefficient from the Green–Kubo integral of the VACF (trapezoids),
+    /// `D = ⅓ ∫ ⟨v(0)·v(t)⟩ dt`.
+    pub fn diffusion_from_vacf(&self) -> Option<f64> {
+        let t = self.vacf_table();
+        if t.len() < 2 {
+            return None;
+        }
+        let integral: f64 = t
+            .windows(2)
+            .map(|w| 0.5 * (w[0].1 + w[1].1) * (w[1].0 - w[0].0))
+            .sum();
+        Some(integral / 3.0)
+    }
+}
+
+/// One row of the pressure and energy time series.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SeriesRow {
+    /// Simulated time since the start of production.
+    pub time: f64,
+    /// Kinetic energy.
+    pub kinetic: f64,
+    /// Potential energy.
+    pub potential: f64,
+    /// Total energy.
+    pub total: f64,
+    /// Instantaneous kinetic temperature.
+    pub temperature: f64,
+    /// Pressure averaged over the interval since the previous sample (NaN for the first).
+    pub pressure: f64,
+}
+
+/// Pressure and energy time series.
+#[derive(Clone, Debug, Default)]
+pub struct Series {
+    rows: Vec<SeriesRow>,
+    last: Option<(f64, f64, f64)>,
+}
+
+impl Series {
+    fn sample(&mut self, view: &View<'_>) {
+        let n = view.bodies.len() as f64;
+        let l = view.lengths;
+        let volume = l.x * l.y * l.z;
+        let pressure = match self.last {
+            Some((t, w, kint)) if view.elapsed > t => {
+                let dt = view.elapsed - t;
+                let kt = 2.0 * (view.kinetic_integral - kint) / dt / view.dof;
+                (n * kt + (view.virial - w) / (3.0 * dt)) / volume
+            }
+            _ => f64::NAN,
+        };
+        self.last = Some((view.elapsed, view.virial, view.kinetic_integral));
+        self.rows.push(SeriesRow {
+            time: view.elapsed,
+            kinetic: view.kinetic,
+            potential: view.potential,
+            total: view.kinetic + view.potential,
+            temperature: 2.0 * view.kinetic / view.dof,
+            pressure,
+        });
+    }
+
+    /// The rows.
+    pub fn rows(&self) -> &[SeriesRow] {
+        &self.rows
+    }
+}
+
+/// The observables a scene asked for.
+#[derive(Debug, Default)]
+pub struct Observers {
+    /// Radial distribution function.
+    pub rdf: Option<Rdf>,
+    /// MSD and VACF.
+    pub correlations: Option<Correlations>,
+    /// Pressure and energy series.
+    pub series: Option<Series>,
+    /// Trajectory frames (written by the output module).
+    pub trajectory: Option<crate::output::Trajectory>,
+}
+
+impl Sampler for Observers {
+    fn sample(&mut self, view: &View<'_>) {
+        if let Some(r) = &mut self.rdf {
+            r.sample(view);
+        }
+        if let Some(c) = &mut self.correlations {
+            c.sample(view);
+        }
+        if let Some(s) = &mut self.series {
+            s.sample(view);
+        }
+    }
+
+    fn frame(&mut self, view: &View<'_>) {
+        if let Some(t) = &mut self.trajectory {
+            t.write_frame(view);
+        }
+    }
+}

@@ -1,0 +1,930 @@
+//! The scene file: what to simulate, read from TOML.
+//!
+//! A scene is read in three steps, each with its own kind of error:
+//!
+//! 1. the text is parsed as TOML ([`SceneError::Syntax`], with line and column);
+//! 2. `--set KEY=VALUE` overrides are applied to the parsed document
+//!    ([`Scene::apply_override`]), so a sweep needs no file edits;
+//! 3. the document is read into the typed structs below, which deny unknown keys
+//!    ([`SceneError::Key`] names the dotted key, for a file and an override alike), and the
+//!    values are checked against each other ([`SceneError::Invalid`], again naming the key).
+//!
+//! Every key is documented in `docs/USER-GUIDE.md`; the corpus of bad scenes in
+//! `tests/scene_errors.rs` pins the message of each kind of mistake.
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Deserializer};
+
+/// The scene format this version of `dmd` reads.
+pub const FORMAT_VERSION: u32 = 1;
+
+/// What is wrong with a scene.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    /// The file could not be read.
+    #[error("cannot read scene file {path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// The text is not valid TOML.
+    #[error("scene is not valid TOML: {0}")]
+    Syntax(String),
+    /// A key is unknown, missing, or has a value of the wrong type.
+    #[error("scene key `{key}`: {problem}")]
+    Key {
+        /// Dotted path of the key (`.` for the whole scene).
+        key: String,
+        /// What is wrong with it.
+        problem: String,
+    },
+    /// A value is of the right type but not acceptable (alone or with others).
+    #[error("scene key `{key}`: {problem}")]
+    Invalid {
+        /// Dotted path of the key.
+        key: String,
+        /// What is wrong with it.
+        problem: String,
+    },
+    /// A `--set` argument is malformed.
+    #[error("override `{arg}`: {problem}")]
+    Override {
+        /// The argument as given.
+        arg: String,
+        /// What is wrong with it.
+        problem: String,
+    },
+}
+
+impl SceneError {
+    pub(crate) fn invalid(key: impl Into<String>, problem: impl Into<String>) -> Self {
+        SceneError::Invalid {
+            key: key.into(),
+            problem: problem.into(),
+        }
+    }
+}
+
+/// A whole scene.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// Format version; must be [`FORMAT_VERSION`].
+    pub version: u32,
+    /// Seed of every random number of the run (initial velocities, thermostat).
+    #[serde(default = "default_seed")]
+    pub seed: u64,
+    /// The periodic box.
+    #[serde(rename = "box")]
+    pub box_: BoxSpec,
+    /// Species of bodies, with their counts and masses.
+    pub species: Vec<SpeciesSpec>,
+    /// Pair potentials, one per unordered pair of species.
+    #[serde(default)]
+    pub pair: Vec<PairSpec>,
+    /// Initial positions and velocities.
+    pub init: InitSpec,
+    /// Thermostat (off unless given).
+    #[serde(default)]
+    pub thermostat: ThermostatSpec,
+    /// Run length, queue and numerical settings.
+    pub run: RunSpec,
+    /// What is written besides `summary.json`.
+    #[serde(default)]
+    pub output: OutputSpec,
+}
+
+fn default_seed() -> u64 {
+    1
+}
+
+/// The periodic box: `density` (with `aspect`) or explicit `lengths`.
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct BoxSpec {
+    /// Number density N/V; the box is sized to hold all bodies at it.
+    pub density: Option<f64>,
+    /// Edge lengths (Lx, Ly, Lz).
+    pub lengths: Option<[f64; 3]>,
+    /// Proportions of the edges when the box is sized from `density` (default cubic).
+    pub aspect: Option<[f64; 3]>,
+}
+
+/// One species.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SpeciesSpec {
+    /// Name, used by pair tables and written to trajectories.
+    pub name: String,
+    /// Number of bodies.
+    #[serde(deserialize_with = "count")]
+    pub count: u64,
+    /// Mass (default 1).
+    #[serde(default = "one")]
+    pub mass: f64,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+/// A stepped radial pair potential between two species.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct PairSpec {
+    /// The two species (the same name twice for like pairs).
+    pub species: [String; 2],
+    /// `[radius, energy step]` pairs with strictly increasing radii: crossing radius `r`
+    /// inwards changes the pair energy by the step (`inf` = hard core, innermost only). The
+    /// energy beyond the last radius is zero.
+    pub steps: Vec<[f64; 2]>,
+}
+
+/// Where the initial positions come from.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum Positions {
+    /// Face-centred cubic lattice filling the box (4 sites per unit cell).
+    Fcc,
+    /// Simple cubic lattice filling the box.
+    Sc,
+    /// An (extended) XYZ file, `init.file`.
+    File,
+}
+
+/// Initial configuration.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct InitSpec {
+    /// `fcc`, `sc` or `file`.
+    pub positions: Positions,
+    /// The XYZ file when `positions = "file"` (relative to the scene file).
+    pub file: Option<PathBuf>,
+    /// Temperature of the Maxwell–Boltzmann velocities (energy units, k = 1).
+    pub temperature: f64,
+}
+
+/// Thermostat kinds.
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum ThermostatKind {
+    /// No thermostat: NVE throughout.
+    #[default]
+    None,
+    /// Andersen: random bodies get fresh Maxwell–Boltzmann velocities at a given rate.
+    Andersen,
+}
+
+/// When the thermostat acts.
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum ThermostatPhase {
+    /// During equilibration only; production is NVE.
+    #[default]
+    Equilibration,
+    /// During equilibration and production (NVT production).
+    Always,
+}
+
+/// The thermostat.
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ThermostatSpec {
+    /// `none` or `andersen`.
+    #[serde(default)]
+    pub kind: ThermostatKind,
+    /// Thermostat collisions per body per unit time (Andersen's ν).
+    pub rate: Option<f64>,
+    /// Bath temperature (default `init.temperature`).
+    pub temperature: Option<f64>,
+    /// `equilibration` (default) or `always`.
+    #[serde(default)]
+    pub during: ThermostatPhase,
+}
+
+/// Which priority queue schedules the events.
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum QueueKind {
+    /// G. Paul's O(1) bounded queue (default).
+    #[default]
+    Bounded,
+    /// Binary heap, O(log n).
+    Heap,
+    /// Tournament tree, one leaf per body, updated in place.
+    Tournament,
+}
+
+/// Run length and numerical settings.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RunSpec {
+    /// Events of equilibration before production (default 0).
+    #[serde(default, deserialize_with = "count")]
+    pub equilibration_events: u64,
+    /// Or: simulated time of equilibration.
+    pub equilibration_time: Option<f64>,
+    /// Production length in events (pair events, cell crossings, thermostat events).
+    #[serde(default, deserialize_with = "opt_count")]
+    pub events: Option<u64>,
+    /// Or: production length in simulated time.
+    pub time: Option<f64>,
+    /// Event queue (default `bounded`).
+    #[serde(default)]
+    pub queue: QueueKind,
+    /// Events between re-basings of the time origin (default 100 N, at least 10⁶, at most 2³¹).
+    #[serde(default, deserialize_with = "opt_count")]
+    pub rebase_events: Option<u64>,
+    /// Neighbour-list skin δ, a length (default: chosen from the density, see the user guide).
+    pub skin: Option<f64>,
+}
+
+/// Radial distribution function.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RdfSpec {
+    /// Number of bins (default 200).
+    #[serde(default = "default_bins", deserialize_with = "count")]
+    pub bins: u64,
+    /// Largest distance (default: half the smallest box side, at most 5).
+    pub r_max: Option<f64>,
+    /// Evaluate g(r) at every `every`-th sample only (default 10): one evaluation costs about
+    /// as much as N · ρ · (4π/3) r_max³ pair distances.
+    #[serde(default = "default_rdf_every", deserialize_with = "count")]
+    pub every: u64,
+}
+
+fn default_rdf_every() -> u64 {
+    10
+}
+
+fn default_bins() -> u64 {
+    200
+}
+
+/// A time correlation (mean-square displacement or velocity autocorrelation).
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct CorrelationSpec {
+    /// Longest time lag.
+    pub max_lag: f64,
+}
+
+/// Trajectory output.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct TrajectorySpec {
+    /// Simulated time between frames.
+    pub interval: f64,
+}
+
+/// Outputs besides `summary.json`.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct OutputSpec {
+    /// Simulated time between samples of the observables.
+    pub sample_interval: Option<f64>,
+    /// Radial distribution function → `rdf.csv`.
+    pub rdf: Option<RdfSpec>,
+    /// Mean-square displacement → `msd.csv`.
+    pub msd: Option<CorrelationSpec>,
+    /// Velocity autocorrelation → `vacf.csv`.
+    pub vacf: Option<CorrelationSpec>,
+    /// Pressure and energy time series → `series.csv`.
+    #[serde(default)]
+    pub series: bool,
+    /// Extended XYZ trajectory → `trajectory.xyz`.
+    pub trajectory: Option<TrajectorySpec>,
+    /// An SVG plot next to each CSV file (default true).
+    #[serde(default = "yes")]
+    pub plots: bool,
+}
+
+fn yes() -> bool {
+    true
+}
+
+impl Default for OutputSpec {
+    fn default() -> Self {
+        OutputSpec {
+            sample_interval: None,
+            rdf: None,
+            msd: None,
+            vacf: None,
+            series: false,
+            trajectory: None,
+            plots: true,
+        }
+    }
+}
+
+/// A count: a non-negative integer, also accepted as an integral float (`1e7`).
+fn count<'de, D: Deserializer<'de>>(d: D) -> Result<u64, D::Error> {
+    struct V;
+    impl serde::de::Visitor<'_> for V {
+        type Value = u64;
+        fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+            f.write_str("a non-negative whole number")
+        }
+        fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<u64, E> {
+            Ok(v)
+        }
+        fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<u64, E> {
+            u64::try_from(v)
+                .map_err(|_| E::custom(format!("expected a non-negative whole number, got {v}")))
+        }
+        fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<u64, E> {
+            if v >= 0.0 && v.fract() == 0.0 && v < 1.8e19 {
+                Ok(v as u64)
+            } else {
+                Err(E::custom(format!(
+                    "expected a non-negative whole number, got {v}"
+                )))
+            }
+        }
+    }
+    d.deserialize_any(V)
+}
+
+fn opt_count<'de, D: Deserializer<'de>>(d: D) -> Result<Option<u64>, D::Error> {
+    count(d).map(Some)
+}
+
+impl Scene {
+    /// Reads and checks a scene file, applying `overrides` (`KEY=VALUE`) first.
+    ///
+    /// # Errors
+    /// Any [`SceneError`]; the message names the file, the key and the problem.
+    pub fn load(path: &Path, overrides: &[String]) -> Result<(Scene, PathBuf), SceneError> {
+        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+            path: path.to_owned(),
+            source,
+        })?;
+        let scene = Scene::from_str_with(&text, overrides)?;
+        let base = path.parent().map(Path::to_owned).unwrap_or_default();
+        Ok((scene, base))
+    }
+
+    /// Parses and checks scene text, applying `overrides` (`KEY=VALUE`) first.
+    ///
+    /// # Errors
+    /// Any [`SceneError`].
+    pub fn from_str_with(text: &str, overrides: &[String]) -> Result<Scene, SceneError> {
+        let mut doc: toml::Table = text
+            .parse()
+            .map_err(|e: toml::de::Error| SceneError::Syntax(e.to_string().trim().to_owned()))?;
+        for arg in overrides {
+            Scene::apply_override(&mut doc, arg)?;
+        }
+        let scene: Scene = serde_path_to_error::deserialize(toml::Value::Table(doc)).map_err(
+            |e: serde_path_to_error::Error<toml::de::Error>| {
+                let key = e.path().to_string();
+                // toml appends its own `in `key`` line; the path above is more precise.
+                let problem = e.inner().to_string();
+                let problem = problem
+                    .split("\nin `")
+                    .next()
+                    .unwrap_or("")
+                    .trim()
+                    .to_owned();
+                SceneError::Key { key, problem }
+            },
+        )?;
+        scene.check()?;
+        Ok(scene)
+    }
+
+    /// Applies one `KEY=VALUE` override to a parsed scene document. `KEY` is a dotted path
+    /// (`run.events`, `species.0.mass`: an index picks an element of an array); `VALUE` is
+    /// read as a TOML value (`0.5`, `[1, 1, 2]`, `"heap"`, `inf`), or as a string if it is not
+    /// one (`run.queue=heap`); an empty `VALUE` removes the key (`run.events=` to give
+    /// `run.time` instead). Keys the scene does not know are caught by the same check as in a
+    /// file.
+    ///
+    /// # Errors
+    /// [`SceneError::Override`] if the argument has no `=` or the path cannot be followed.
+    pub fn apply_override(doc: &mut toml::Table, arg: &str) -> Result<(), SceneError> {
+        let bad = |problem: String| SceneError::Override {
+            arg: arg.to_owned(),
+            problem,
+        };
+        let (key, value) = arg
+            .split_once('=')
+            .ok_or_else(|| bad("expected KEY=VALUE".to_owned()))?;
+        let key = key.trim();
+        if key.is_empty() || key.split('.').any(str::is_empty) {
+            return Err(bad(format!("`{key}` is not a dotted key path")));
+        }
+        let parts: Vec<&str> = key.split('.').collect();
+        if value.trim().is_empty() {
+            return remove_key(doc, &parts).map_err(bad);
+        }
+        let value = parse_value(value.trim());
+        let mut node: &mut toml::Value = {
+            // The root is a table; wrap the walk in a Value for uniformity.
+            let first = parts[0];
+            if parts.len() == 1 {
+                doc.insert(first.to_owned(), value);
+                return Ok(());
+            }
+            doc.entry(first.to_owned())
+                .or_insert_with(|| toml::Value::Table(toml::Table::new()))
+        };
+        let mut walked = parts[0].to_owned();
+        for (k, part) in parts.iter().enumerate().skip(1) {
+            let last = k + 1 == parts.len();
+            node = match node {
+                toml::Value::Table(t) => {
+                    if last {
+                        t.insert((*part).to_owned(), value);
+                        return Ok(());
+                    }
+                    t.entry((*part).to_owned())
+                        .or_insert_with(|| toml::Value::Table(toml::Table::new()))
+                }
+                toml::Value::Array(a) => {
+                    let idx: usize = part.parse().map_err(|_| {
+                        bad(format!("`{walked}` is an array: `{part}` is not an index"))
+                    })?;
+                    let len = a.len();
+                    let slot = a.get_mut(idx).ok_or_else(|| {
+                        bad(format!("`{walked}` has {len} elements, no index {idx}"))
+                    })?;
+                    if last {
+                        *slot = value;
+                        return Ok(());
+                    }
+                    slot
+                }
+                _ => return Err(bad(format!("`{walked}` is a value, not a table"))),
+            };
+            walked.push('.');
+            walked.push_str(part);
+        }
+        Ok(())
+    }
+
+    /// Total number of bodies.
+    pub fn n_bodies(&self) -> u64 {
+        self.species.iter().map(|s| s.count).sum()
+    }
+
+    /// Checks the values against each other (the part serde cannot).
+    fn check(&self) -> Result<(), SceneError> {
+        if self.version != FORMAT_VERSION {
+            return Err(SceneError::invalid(
+                "version",
+                format!(
+                    "unsupported scene format version {} (this dmd reads version {FORMAT_VERSION})",
+                    self.version
+                ),
+            ));
+        }
+        // Box.
+        let b = &self.box_;
+        match (b.density, b.lengths) {
+            (Some(_), Some(_)) => {
+                return Err(SceneError::invalid(
+                    "box",
+                    "give either `density` or `lengths`, not both",
+                ));
+            }
+            (None, None) if self.init.positions != Positions::File => {
+                return Err(SceneError::invalid(
+                    "box",
+                    "give either `density` or `lengths`",
+                ));
+            }
+            _ => {}
+        }
+        if let Some(d) = b.density {
+            positive("box.density", d)?;
+        }
+        if let Some(l) = b.lengths {
+            for (k, x) in l.iter().enumerate() {
+                positive(&format!("box.lengths[{k}]"), *x)?;
+            }
+            if b.aspect.is_some() {
+                return Err(SceneError::invalid(
+                    "box.aspect",
+                    "only used with `box.density`; `box.lengths` already fixes the shape",
+                ));
+            }
+        }
+        if let Some(a) = b.aspect {
+            for (k, x) in a.iter().enumerate() {
+                positive(&format!("box.aspect[{k}]"), *x)?;
+            }
+        }
+        // Species.
+        if self.species.is_empty() {
+            return Err(SceneError::invalid(
+                "species",
+                "at least one species is needed",
+            ));
+        }
+        for (k, s) in self.species.iter().enumerate() {
+            if s.name.trim().is_empty() || s.name.contains(char::is_whitespace) {
+                return Err(SceneError::invalid(
+                    format!("species[{k}].name"),
+                    format!("`{}` is not a name: use letters, digits, _ or -", s.name),
+                ));
+            }
+            if self.species[..k].iter().any(|o| o.name == s.name) {
+                return Err(SceneError::invalid(
+                    format!("species[{k}].name"),
+                    format!("species `{}` is defined twice", s.name),
+                ));
+            }
+            positive(&format!("species[{k}].mass"), s.mass)?;
+        }
+        let n = self.n_bodies();
+        if n < 2 {
+            return Err(SceneError::invalid(
+                "species",
+                format!("a simulation needs at least 2 bodies, the species count {n}"),
+            ));
+        }
+        if n > crate::neighbour::MAX_BODIES {
+            return Err(SceneError::invalid(
+                "species",
+                format!(
+                    "{n} bodies is more than this dmd can index (2^27 = {})",
+                    crate::neighbour::MAX_BODIES
+                ),
+            ));
+        }
+        // Pair tables.
+        let names: Vec<&str> = self.species.iter().map(|s| s.name.as_str()).collect();
+        let index = |k: usize, name: &str| -> Result<usize, SceneError> {
+            names.iter().position(|&m| m == name).ok_or_else(|| {
+                SceneError::invalid(
+                    format!("pair[{k}].species"),
+                    format!(
+                        "unknown species `{name}` (the scene defines {})",
+                        names
+                            .iter()
+                            .map(|m| format!("`{m}`"))
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ),
+                )
+            })
+        };
+        let ns = names.len();
+        let mut seen = vec![None::<usize>; ns * ns];
+        for (k, p) in self.pair.iter().enumerate() {
+            let (a, b) = (index(k, &p.species[0])?, index(k, &p.species[1])?);
+            if let Some(first) = seen[a * ns + b] {
+                return Err(SceneError::invalid(
+                    format!("pair[{k}].species"),
+                    format!(
+                        "the pair `{}`–`{}` already has a table (pair[{first}])",
+                        p.species[0], p.species[1]
+                    ),
+                ));
+            }
+            seen[a * ns + b] = Some(k);
+            seen[b * ns + a] = Some(k);
+            check_steps(k, &p.steps)?;
+        }
+        for a in 0..ns {
+            for b in a..ns {
+                if seen[a * ns + b].is_none() {
+                    return Err(SceneError::invalid(
+                        "pair",
+                        format!(
+                            "no pair table for species `{}` and `{}`: every pair of species needs one",
+                            names[a], names[b]
+                        ),
+                    ));
+                }
+            }
+        }
+        // Initial state.
+        positive("init.temperature", self.init.temperature)?;
+        match (self.init.positions, &self.init.file) {
+            (Positions::File, None) => {
+                return Err(SceneError::invalid(
+                    "init.file",
+                    "needed when `init.positions = \"file\"`",
+                ));
+            }
+            (Positions::Fcc | Positions::Sc, Some(_)) => {
+                return Err(SceneError::invalid(
+                    "init.file",
+                    "only read when `init.positions = \"file\"`",
+                ));
+            }
+            _ => {}
+        }
+        // Thermostat.
+        let t = &self.thermostat;
+        match t.kind {
+            ThermostatKind::None => {
+                if t.rate.is_some() || t.temperature.is_some() {
+                    return Err(SceneError::invalid(
+                        "thermostat.kind",
+                        "`rate` and `temperature` are given but no thermostat is chosen (kind = \"andersen\")",
+                    ));
+                }
+            }
+            ThermostatKind::Andersen => {
+                let rate = t.rate.ok_or_else(|| {
+                    SceneError::invalid(
+                        "thermostat.rate",
+                        "an Andersen thermostat needs a rate (collisions per body per unit time)",
+                    )
+                })?;
+                positive("thermostat.rate", rate)?;
+                if let Some(temp) = t.temperature {
+                    positive("thermostat.temperature", temp)?;
+                }
+            }
+        }
+        // Run.
+        let r = &self.run;
+        if r.equilibration_time.is_some() && r.equilibration_events > 0 {
+            return Err(SceneError::invalid(
+                "run",
+                "give either `equilibration_events` or `equilibration_time`, not both",
+            ));
+        }
+        if let Some(t) = r.equilibration_time {
+            non_negative("run.equilibration_time", t)?;
+        }
+        match (r.events, r.time) {
+            (Some(_), Some(_)) => {
+                return Err(SceneError::invalid(
+                    "run",
+                    "give either `events` or `time`, not both",
+                ));
+            }
+            (None, None) => {
+                return Err(SceneError::invalid(
+                    "run",
+                    "give the production length: `events` or `time`",
+                ));
+            }
+            (_, Some(t)) => positive("run.time", t)?,
+            (Some(_), None) => {}
+        }
+        if let Some(skin) = r.skin {
+            positive("run.skin", skin)?;
+        }
+        if let Some(k) = r.rebase_events
+            && !(1..=crate::run::MAX_REBASE_EVENTS).contains(&k)
+        {
+            return Err(SceneError::invalid(
+                "run.rebase_events",
+                format!("must be between 1 and 2^31, got {k}"),
+            ));
+        }
+        // Outputs.
+        let o = &self.output;
+        let wants_samples = o.rdf.is_some() || o.msd.is_some() || o.vacf.is_some() || o.series;
+        match o.sample_interval {
+            Some(dt) => positive("output.sample_interval", dt)?,
+            None if wants_samples => {
+                let which = [
+                    (o.rdf.is_some(), "rdf"),
+                    (o.msd.is_some(), "msd"),
+                    (o.vacf.is_some(), "vacf"),
+                    (o.series, "series"),
+                ]
+                .iter()
+                .find(|(on, _)| *on)
+                .map(|(_, n)| *n)
+                .unwrap_or("series");
+                return Err(SceneError::invalid(
+                    "output.sample_interval",
+                    format!("needed by `output.{which}`: the simulated time between samples"),
+                ));
+            }
+            None => {}
+        }
+        if let Some(rdf) = &o.rdf {
+            if rdf.bins == 0 || rdf.bins > 1_000_000 {
+                return Err(SceneError::invalid(
+                    "output.rdf.bins",
+                    format!("must be between 1 and 10^6, got {}", rdf.bins),
+                ));
+            }
+            if let Some(r) = rdf.r_max {
+                positive("output.rdf.r_max", r)?;
+            }
+            if rdf.every == 0 {
+                return Err(SceneError::invalid(
+                    "output.rdf.every",
+                    "must be at least 1",
+                ));
+            }
+        }
+        for (name, c) in [("msd", &o.msd), ("vacf", &o.vacf)] {
+            if let Some(c) = c {
+                positive(&format!("output.{name}.max_lag"), c.max_lag)?;
+                if let Some(dt) = o.sample_interval
+                    && c.max_lag < dt
+                {
+                    return Err(SceneError::invalid(
+                        format!("output.{name}.max_lag"),
+                        format!(
+                            "{} is shorter than output.sample_interval = {dt}",
+                            c.max_lag
+                        ),
+                    ));
+                }
+            }
+        }
+        if let Some(tr) = &o.trajectory {
+            positive("output.trajectory.interval", tr.interval)?;
+        }
+        Ok(())
+    }
+}
+
+fn positive(key: &str, x: f64) -> Result<(), SceneError> {
+    if x.is_finite() && x > 0.0 {
+        Ok(())
+    } else {
+        Err(SceneError::invalid(
+            key,
+            format!("must be a positive finite number, got {x}"),
+        ))
+    }
+}
+
+fn non_negative(key: &str, x: f64) -> Result<(), SceneError> {
+    if x.is_finite() && x >= 0.0 {
+        Ok(())
+    } else {
+        Err(SceneError::invalid(
+            key,
+            format!("must be a finite number ≥ 0, got {x}"),
+        ))
+    }
+}
+
+fn check_steps(k: usize, steps: &[[f64; 2]]) -> Result<(), SceneError> {
+    let key = format!("pair[{k}].steps");
+    if steps.is_empty() {
+        return Err(SceneError::invalid(
+            key,
+            "at least one [radius, energy step] is needed (a hard core is [diameter, inf])",
+        ));
+    }
+    for (s, &[r, dv]) in steps.iter().enumerate() {
+        let here = format!("{key}[{s}]");
+        if !(r.is_finite() && r > 0.0) {
+            return Err(SceneError::invalid(
+                here,
+                format!("the radius must be a positive finite number, got {r}"),
+            ));
+        }
+        if dv.is_nan() || dv == f64::NEG_INFINITY {
+            return Err(SceneError::invalid(
+                here,
+                format!("the energy step must be a number or inf (a hard core), got {dv}"),
+            ));
+        }
+        if dv == 0.0 {
+            return Err(SceneError::invalid(
+                here,
+                "the energy step is 0, which changes nothing: remove the step",
+            ));
+        }
+        if dv == f64::INFINITY && s > 0 {
+            return Err(SceneError::invalid(
+                here,
+                "a hard core (step inf) must be the innermost step: nothing inside it is reachable",
+            ));
+        }
+        if s > 0 && r <= steps[s - 1][0] {
+            return Err(SceneError::invalid(
+                key,
+                format!(
+                    "step radii must increase strictly, but {} is followed by {r}",
+                    steps[s - 1][0]
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Removes a dotted key (an `--set KEY=` override).
+fn remove_key(doc: &mut toml::Table, parts: &[&str]) -> Result<(), String> {
+    let (last, path) = parts.split_last().expect("a key has at least one part");
+    let mut table = doc;
+    let mut walked = String::new();
+    for part in path {
+        if !walked.is_empty() {
+            walked.push('.');
+        }
+        walked.push_str(part);
+        table = match table.get_mut(*part) {
+            Some(toml::Value::Table(t)) => t,
+            _ => return Err(format!("`{walked}` is not a table of the scene")),
+        };
+    }
+    table
+        .remove(*last)
+        .map(|_| ())
+        .ok_or_else(|| format!("the scene has no key `{}` to remove", parts.join(".")))
+}
+
+/// Reads an override value as TOML, or as a string if it is not valid TOML.
+fn parse_value(text: &str) -> toml::Value {
+    format!("v = {text}")
+        .parse::<toml::Table>()
+        .ok()
+        .and_then(|mut t| t.remove("v"))
+        .unwrap_or_else(|| toml::Value::String(text.to_owned()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const MINIMAL: &str = r#"
+version = 1
+[box]
+density = 0.5
+[[species]]
+name = "A"
+count = 32
+[[pair]]
+species = ["A", "A"]
+steps = [[1.0, inf]]
+[init]
+positions = "fcc"
+temperature = 1.0
+[run]
+events = 1000
+"#;
+
+    #[test]
+    fn minimal_scene_reads_with_defaults() {
+        let s = Scene::from_str_with(MINIMAL, &[]).unwrap();
+        assert_eq!(s.seed, 1);
+        assert_eq!(s.species[0].mass, 1.0);
+        assert_eq!(s.run.queue, QueueKind::Bounded);
+        assert_eq!(s.pair[0].steps, vec![[1.0, f64::INFINITY]]);
+        assert!(s.output.plots);
+    }
+
+    #[test]
+    fn overrides_reach_nested_keys_and_array_elements() {
+        let s = Scene::from_str_with(
+            MINIMAL,
+            &[
+                "run.events=1e6".into(),
+                "run.queue=heap".into(),
+                "species.0.mass=2.5".into(),
+                "box.density = 0.8".into(),
+                "pair.0.steps=[[1.0, inf], [1.5, -1.0]]".into(),
+                "seed=7".into(),
+            ],
+        )
+        .unwrap();
+        assert_eq!(s.run.events, Some(1_000_000));
+        assert_eq!(s.run.queue, QueueKind::Heap);
+        assert_eq!(s.species[0].mass, 2.5);
+        assert_eq!(s.box_.density, Some(0.8));
+        assert_eq!(s.pair[0].steps.len(), 2);
+        assert_eq!(s.seed, 7);
+    }
+
+    #[test]
+    fn override_errors_name_the_argument() {
+        let e = Scene::from_str_with(MINIMAL, &["run.events".into()]).unwrap_err();
+        assert_eq!(e.to_string(), "override `run.events`: expected KEY=VALUE");
+        let e = Scene::from_str_with(MINIMAL, &["species.3.mass=1".into()]).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "override `species.3.mass=1`: `species` has 1 elements, no index 3"
+        );
+        let e = Scene::from_str_with(MINIMAL, &["run.evnts=".into()]).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "override `run.evnts=`: the scene has no key `run.evnts` to remove"
+        );
+        let s =
+            Scene::from_str_with(MINIMAL, &["run.events=".into(), "run.time=2".into()]).unwrap();
+        assert_eq!((s.run.events, s.run.time), (None, Some(2.0)));
+        let e = Scene::from_str_with(MINIMAL, &["run.events.x=1".into()]).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "override `run.events.x=1`: `run.events` is a value, not a table"
+        );
+        let e = Scene::from_str_with(MINIMAL, &["seed.x=1".into()]).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "scene key `seed`: invalid type: map, expected u64"
+        );
+    }
+}
