@@ -97,7 +97,13 @@ proptest! {
             (c - w * d.ln_1p().sqrt(), dir)
         });
         let a = Adaptive::new(0.02).unwrap().with_tolerances(tol(0.02)).unwrap();
-        let g = Grid::new(0.008, 0.1).unwrap().with_tolerances(tol(0.008)).unwrap();
+        // The grid's contract (000 §III.A): it examines a dip only if |f| at a grid point next
+        // to it is below the threshold, and a grid point lies within Δt/2 of the bottom, where
+        // f ≤ f_min + f''·(Δt/2)²/2 with f'' = 2(1 + d)/w². A threshold of 0.1 misses narrow
+        // dips (w = 0.01: f = 0.139 at the grid points), so it is set from that bound.
+        let dt = 0.008;
+        let threshold = 1.25 * (1.0 + d.abs()) * (dt / w).powi(2) / 4.0;
+        let g = Grid::new(dt, threshold).unwrap().with_tolerances(tol(dt)).unwrap();
         let mut f = Shape::Dip { s, c, w, d };
         check(a.start(&mut f, 0.0, 1.0, Crossing::Either, f64::INFINITY).unwrap(), expect)?;
         check(g.start(&mut f, 0.0, 1.0, Crossing::Either, f64::INFINITY).unwrap(), expect)?;
