@@ -147,7 +147,9 @@ mod tests {
         let script = read(".ci/run");
         for (k, v) in CI_ENV {
             assert!(
-                script.lines().any(|l| l.trim() == format!("export {k}={v}")),
+                script
+                    .lines()
+                    .any(|l| l.trim() == format!("export {k}={v}")),
                 ".ci/run must `export {k}={v}`"
             );
         }

@@ -15,6 +15,9 @@
 //!   `D/D₀ = (1/n)(1 − n/1.09)(1 + n²(0.4 − 0.83n²))`, `D₀ = ⅜σ√(kT/πm)`, `n = ρσ³`;
 //! - square well λ = 1.5, low density: the second-virial limit
 //!   `U/(Nρ) → −½ε e^{ε/kT} (4π/3)(λ³ − 1)σ³` (exact as ρ → 0);
+//! - square well λ = 1.5, ρσ³ = 0.5, kT/ε = 1.5: the equation of state of R. Espíndola-Heredia,
+//!   F. del Río and A. Malijevský (J. Chem. Phys. 130, 024509, 2009) for the energy, and the exact
+//!   contact-value (structural) pressure for the collision-virial pressure;
 //! - square well, mid density: the exact high-temperature limit (first-order perturbation
 //!   theory, Zwanzig 1954) `U/N → −2πρε ∫_σ^{λσ} g_HS(r) r² dr`, with `g_HS` of hard spheres at
 //!   the same density measured here (whose pressure is validated above).
@@ -529,6 +532,105 @@ fn validate(args: &Args, work: &Path, r: &mut Report) -> Result<(), String> {
         "\nU/N extrapolated to 1/kT → 0: **{a:.5}**, first-order limit from g_HS {first_order:.5} \
          (∫₁^1.5 g_HS r² dr = {integral:.5}), deviation {:+.2} %: {verdict}.\n",
         100.0 * dev
+    )
+    .ok();
+
+    // Mid density against a published equation of state, and the pressure against the structure.
+    let eos =
+        dmd_sim::reference::square_well::SquareWellEos::new(1.5).ok_or("λ = 1.5 is fitted")?;
+    let (t_sw, rho_sw) = (1.5, 0.5);
+    let dir = work.join("sw-eos");
+    let sum = run(
+        SW,
+        &[
+            s("thermostat.during=always"),
+            format!("run.events={}", if q { "3e6" } else { "3e7" }),
+            s("output.sample_interval=0.05"),
+            s("output.rdf={ bins = 1000, r_max = 2.0 }"),
+            s("output.plots=false"),
+        ],
+        &dir,
+    )?;
+    let (u_eos, z_eos) = (
+        eos.energy_per_particle(t_sw, rho_sw),
+        eos.compressibility(t_sw, rho_sw),
+    );
+    let u = sum.potential_energy_per_body;
+    let dev_u = (u - u_eos) / u_eos;
+    let verdict_u = r.check(dev_u.abs() <= if q { 0.02 } else { 0.01 });
+    // Structural pressure of the square well (exact): Z = 1 + (2π/3)ρ[g(σ⁺) − λ³(g(λσ⁻) −
+    // g(λσ⁺))], with the jump at λσ fixed by the continuous cavity function,
+    // g(λσ⁻) = e^{ε/kT} g(λσ⁺). Contact values by straight lines through the first 0.03σ.
+    let g = csv(&dir.join("rdf.csv"));
+    let contact = |from: f64, to: f64, at: f64| {
+        let pts: Vec<(f64, f64)> = g
+            .iter()
+            .filter(|row| row[0] > from && row[0] < to)
+            .map(|row| (row[0], row[1]))
+            .collect();
+        let (a, b) = fit_line(&pts);
+        a + b * at
+    };
+    let g_core = contact(1.0, 1.03, 1.0);
+    let g_out = contact(1.5, 1.53, 1.5);
+    let z_struct = 1.0
+        + 2.0 * std::f64::consts::PI / 3.0
+            * rho_sw
+            * (g_core - 1.5f64.powi(3) * g_out * ((1.0 / t_sw).exp() - 1.0));
+    let z = sum.compressibility;
+    let dev_z = (z - z_struct) / z_struct;
+    // A short (quick) run resolves Z to a few hundredths only, and the structural Z amplifies
+    // the noise of g(1.5σ⁺) by λ³(e^{ε/kT} − 1)·2πρ/3 ≈ 3.4.
+    let z_tol = if q { 0.15 } else { 0.02 };
+    let verdict_z = r.check(dev_z.abs() <= z_tol);
+    writeln!(
+        w,
+        "Mid density against published data: the equation of state of Espíndola-Heredia, del Río \
+         and Malijevský (J. Chem. Phys. 130, 024509, 2009; Carnahan–Starling plus a fourth-order \
+         high-temperature expansion fitted to Monte Carlo data for 1.1 ≤ λ ≤ 2; \
+         `dmd_sim::reference::square_well`) at kT/ε = {t_sw}, ρσ³ = {rho_sw}, canonical run \
+         (Andersen thermostat throughout), N = 4000, {} events.\n",
+        sum.events
+    )
+    .ok();
+    writeln!(
+        w,
+        "| quantity | simulation | reference | deviation | check |"
+    )
+    .ok();
+    writeln!(w, "|---|---|---|---|---|").ok();
+    writeln!(
+        w,
+        "| U/Nε | {u:.4} | {u_eos:.4} (equation of state) | {:+.2} % | {verdict_u} (≤ {} %) |",
+        100.0 * dev_u,
+        if q { 2 } else { 1 }
+    )
+    .ok();
+    writeln!(
+        w,
+        "| Z (collision virial) | {z:.4} | {z_struct:.4} (from g(σ⁺) = {g_core:.4} and \
+         g(1.5σ⁺) = {g_out:.4}) | {:+.2} % | {verdict_z} (≤ {:.0} %) |",
+        100.0 * dev_z,
+        100.0 * z_tol
+    )
+    .ok();
+    writeln!(
+        w,
+        "| Z | {z:.4} | {z_eos:.4} (equation of state) | {:+.2} % | reported |",
+        100.0 * (z - z_eos) / z_eos
+    )
+    .ok();
+    writeln!(
+        w,
+        "\nThe energy is checked against the published equation of state. Its pressure differs \
+         from the simulation's by {:.3} in Z, while the simulation's own (collision-virial) \
+         pressure is checked against the structural one. Z near 0.75 is a small difference of a \
+         hard-sphere part near 3.3 and an attractive part near −2.5, so a 1–2 % error of the \
+         fitted attractive terms is enough for such a gap; in the development runs (2·10⁷ \
+         events, two seeds) the virial gave Z = 0.717–0.724 and the structural route 0.726–0.731, \
+         the equation of state 0.759. Extrapolating g(1.5σ⁻) from inside the well, instead of \
+         using the exact jump, biases the structural Z up by a similar amount (0.74–0.76).\n",
+        z_eos - z
     )
     .ok();
 

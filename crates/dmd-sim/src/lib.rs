@@ -52,6 +52,7 @@ pub mod observable;
 pub mod output;
 pub mod pair_state;
 pub mod potential;
+pub mod reference;
 pub mod run;
 pub mod scene;
 pub mod schedule;
