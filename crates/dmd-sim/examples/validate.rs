@@ -16,8 +16,8 @@
 //! - square well λ = 1.5, low density: the second-virial limit
 //!   `U/(Nρ) → −½ε e^{ε/kT} (4π/3)(λ³ − 1)σ³` (exact as ρ → 0);
 //! - square well λ = 1.5, ρσ³ = 0.5, kT/ε = 1.5: the equation of state of R. Espíndola-Heredia,
-//!   F. del Río and A. Malijevský (J. Chem. Phys. 130, 024509, 2009) for the energy, and the exact
-//!   contact-value (structural) pressure for the collision-virial pressure;
+//!   F. del Río and A. Malijevský (J. Chem. Phys. 130, 024509, 2009) for the energy; the
+//!   pressure route through the exact low-density limit `(Z − 1)/ρ → B₂`;
 //! - square well, mid density: the exact high-temperature limit (first-order perturbation
 //!   theory, Zwanzig 1954) `U/N → −2πρε ∫_σ^{λσ} g_HS(r) r² dr`, with `g_HS` of hard spheres at
 //!   the same density measured here (whose pressure is validated above).
@@ -430,14 +430,15 @@ fn validate(args: &Args, work: &Path, r: &mut Report) -> Result<(), String> {
         b2_limit(1.5)
     )
     .ok();
-    writeln!(w, "| ρσ³ | U/N | U/(Nρ) |").ok();
-    writeln!(w, "|---|---|---|").ok();
+    writeln!(w, "| ρσ³ | U/N | U/(Nρ) | (Z − 1)/ρ |").ok();
+    writeln!(w, "|---|---|---|---|").ok();
     let low: &[f64] = if q {
         &[0.01, 0.03]
     } else {
         &[0.005, 0.01, 0.02, 0.03]
     };
     let mut pts = Vec::new();
+    let mut z_pts = Vec::new();
     for (k, &rho) in low.iter().enumerate() {
         let dir = work.join(format!("sw-low-{k}"));
         let time = if q { 800.0 } else { 3000.0 };
@@ -452,8 +453,10 @@ fn validate(args: &Args, work: &Path, r: &mut Report) -> Result<(), String> {
             &dir,
         )?;
         let u = sum.potential_energy_per_body;
-        writeln!(w, "| {rho} | {u:.5} | {:.4} |", u / rho).ok();
+        let zr = (sum.compressibility - 1.0) / rho;
+        writeln!(w, "| {rho} | {u:.5} | {:.4} | {zr:.4} |", u / rho).ok();
         pts.push((rho, u / rho));
+        z_pts.push((rho, zr));
     }
     let (a, b) = fit_line(&pts);
     let limit = b2_limit(1.5);
@@ -463,6 +466,21 @@ fn validate(args: &Args, work: &Path, r: &mut Report) -> Result<(), String> {
         w,
         "\nExtrapolated U/(Nρ) at ρ → 0: **{a:.4}** (slope {b:.2}), exact {limit:.4}, deviation {:+.2} %: {verdict}.\n",
         100.0 * dev
+    )
+    .ok();
+    // The pressure route, well events included: (Z − 1)/ρ → B₂ = (2π/3)[1 − (λ³ − 1)(e^{ε/kT} − 1)].
+    let (za, zb) = fit_line(&z_pts);
+    let b2 = 2.0 * std::f64::consts::PI / 3.0
+        * (1.0 - (1.5f64.powi(3) - 1.0) * ((1.0 / 1.5f64).exp() - 1.0));
+    let zdev = (za - b2) / b2;
+    let verdict = r.check(zdev.abs() <= if q { 0.1 } else { 0.03 });
+    writeln!(
+        w,
+        "Pressure (collision virial of core and well events): (Z − 1)/ρ extrapolated to ρ → 0: \
+         **{za:.4}** (slope {zb:.2}), exact B₂/σ³ = (2π/3)[1 − (λ³ − 1)(e^{{ε/kT}} − 1)] = {b2:.4}, \
+         deviation {:+.2} %: {verdict} (≤ {} %).\n",
+        100.0 * zdev,
+        if q { 10 } else { 3 }
     )
     .ok();
 
@@ -545,8 +563,6 @@ fn validate(args: &Args, work: &Path, r: &mut Report) -> Result<(), String> {
         &[
             s("thermostat.during=always"),
             format!("run.events={}", if q { "3e6" } else { "3e7" }),
-            s("output.sample_interval=0.05"),
-            s("output.rdf={ bins = 1000, r_max = 2.0 }"),
             s("output.plots=false"),
         ],
         &dir,
@@ -558,31 +574,7 @@ fn validate(args: &Args, work: &Path, r: &mut Report) -> Result<(), String> {
     let u = sum.potential_energy_per_body;
     let dev_u = (u - u_eos) / u_eos;
     let verdict_u = r.check(dev_u.abs() <= if q { 0.02 } else { 0.01 });
-    // Structural pressure of the square well (exact): Z = 1 + (2π/3)ρ[g(σ⁺) − λ³(g(λσ⁻) −
-    // g(λσ⁺))], with the jump at λσ fixed by the continuous cavity function,
-    // g(λσ⁻) = e^{ε/kT} g(λσ⁺). Contact values by straight lines through the first 0.03σ.
-    let g = csv(&dir.join("rdf.csv"));
-    let contact = |from: f64, to: f64, at: f64| {
-        let pts: Vec<(f64, f64)> = g
-            .iter()
-            .filter(|row| row[0] > from && row[0] < to)
-            .map(|row| (row[0], row[1]))
-            .collect();
-        let (a, b) = fit_line(&pts);
-        a + b * at
-    };
-    let g_core = contact(1.0, 1.03, 1.0);
-    let g_out = contact(1.5, 1.53, 1.5);
-    let z_struct = 1.0
-        + 2.0 * std::f64::consts::PI / 3.0
-            * rho_sw
-            * (g_core - 1.5f64.powi(3) * g_out * ((1.0 / t_sw).exp() - 1.0));
     let z = sum.compressibility;
-    let dev_z = (z - z_struct) / z_struct;
-    // A short (quick) run resolves Z to a few hundredths only, and the structural Z amplifies
-    // the noise of g(1.5σ⁺) by λ³(e^{ε/kT} − 1)·2πρ/3 ≈ 3.4.
-    let z_tol = if q { 0.15 } else { 0.02 };
-    let verdict_z = r.check(dev_z.abs() <= z_tol);
     writeln!(
         w,
         "Mid density against published data: the equation of state of Espíndola-Heredia, del Río \
@@ -608,14 +600,6 @@ fn validate(args: &Args, work: &Path, r: &mut Report) -> Result<(), String> {
     .ok();
     writeln!(
         w,
-        "| Z (collision virial) | {z:.4} | {z_struct:.4} (from g(σ⁺) = {g_core:.4} and \
-         g(1.5σ⁺) = {g_out:.4}) | {:+.2} % | {verdict_z} (≤ {:.0} %) |",
-        100.0 * dev_z,
-        100.0 * z_tol
-    )
-    .ok();
-    writeln!(
-        w,
         "| Z | {z:.4} | {z_eos:.4} (equation of state) | {:+.2} % | reported |",
         100.0 * (z - z_eos) / z_eos
     )
@@ -623,13 +607,14 @@ fn validate(args: &Args, work: &Path, r: &mut Report) -> Result<(), String> {
     writeln!(
         w,
         "\nThe energy is checked against the published equation of state. Its pressure differs \
-         from the simulation's by {:.3} in Z, while the simulation's own (collision-virial) \
-         pressure is checked against the structural one. Z near 0.75 is a small difference of a \
-         hard-sphere part near 3.3 and an attractive part near −2.5, so a 1–2 % error of the \
-         fitted attractive terms is enough for such a gap; in the development runs (2·10⁷ \
-         events, two seeds) the virial gave Z = 0.717–0.724 and the structural route 0.726–0.731, \
-         the equation of state 0.759. Extrapolating g(1.5σ⁻) from inside the well, instead of \
-         using the exact jump, biases the structural Z up by a similar amount (0.74–0.76).\n",
+         from the simulation's by {:.3} in Z and is reported, not checked: Z near 0.75 is a small \
+         difference of a hard-sphere part near 3.3 and an attractive part near −2.5, so a 1–2 % \
+         error of the fitted attractive terms makes such a gap, while the simulation's pressure \
+         route is checked exactly above (hard-sphere Z to 0.04 %, the well's virial through the \
+         low-density B₂). The structural pressure from contact values, \
+         Z = 1 + (2π/3)ρ[g(σ⁺) − λ³ g(λσ⁺)(e^{{ε/kT}} − 1)], agreed with the collision virial in \
+         development runs (0.726–0.731 against 0.717–0.724), but it multiplies the noise of \
+         g(λσ⁺) by 3.4 and moved by ±0.03 with the fit, too much for a check.\n",
         z_eos - z
     )
     .ok();
