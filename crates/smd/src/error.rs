@@ -74,7 +74,7 @@ pub enum SmdError {
     /// its reference than the stability guard allows.
     #[error(
         "step {step} (t = {time}): the integration is unstable: {what}; reduce the time step \
-         (or loosen Guard::max_energy_change if the drift is intended)"
+         (or widen Settings::guard if the change is intended)"
     )]
     Unstable {
         /// Steps completed when the failure was detected.
