@@ -195,6 +195,7 @@ impl NeighbourList {
             }
         }
         let r2 = self.radius * self.radius;
+        #[allow(clippy::needless_range_loop)] // self.cell is read while self.scratch grows
         for i in 0..n {
             self.start.push(self.entries.len() as u32);
             let (p, c) = (pos[i], self.cell[i]);
