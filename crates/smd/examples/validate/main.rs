@@ -23,7 +23,7 @@ use std::process::ExitCode;
 use glam::DVec3;
 use plot::{Axis, Curve};
 use potential::{LennardJones, LjRod, Smoothed};
-use smd::observe::{Correlations, Estimate, Observables, Rdf, slope};
+use smd::observe::{Correlations, Estimate, Observables, Rdf, detrended_std, slope};
 use smd::{BodyModel, Integrator, Lattice, Orientations, Settings, Setup, System, units};
 
 struct Args {
@@ -75,23 +75,6 @@ impl Report {
             Err(e) => self.failed.push(format!("figure {name}: {e}")),
         }
     }
-}
-
-/// Standard deviation of `y` about its least-squares line against `x`.
-fn detrended_std(x: &[f64], y: &[f64]) -> f64 {
-    let n = x.len();
-    if n < 3 {
-        return 0.0;
-    }
-    let b = slope(x, y);
-    let mx = x.iter().sum::<f64>() / n as f64;
-    let my = y.iter().sum::<f64>() / n as f64;
-    let ss: f64 = x
-        .iter()
-        .zip(y)
-        .map(|(&t, &e)| (e - my - b * (t - mx)).powi(2))
-        .sum();
-    (ss / (n - 2) as f64).sqrt()
 }
 
 /// `∫ |f − g|` over the common abscissae of two tables (trapezoids on |f − g|).
