@@ -244,8 +244,8 @@ impl<P: PairPotential> Integrator<P> {
                 why: "> 0 (f64::INFINITY turns it off)",
             });
         }
-        let (_, r_u) = potential.window();
-        let list = NeighbourList::new(r_u, skin);
+        let (r_l, r_u) = potential.window();
+        let list = NeighbourList::new(r_l, r_u, skin);
         let side = system.lengths.min_element();
         if side <= 2.0 * list.radius() {
             return Err(SmdError::BoxTooSmall {
