@@ -130,7 +130,7 @@ fn real_main() -> Result<(), Box<dyn std::error::Error>> {
         }
     }
     println!(
-        "cost        : {:.1} ns per particle-step, {:.3} CPU s per ps, {:.1} steps per list build, {:.1} pairs within r_u per body",
+        "cost        : {:.1} ns per particle-step, {:.3} CPU s per ps (observables included), {:.1} steps per list build, {:.1} pairs within r_u per body",
         p.ns_per_particle_step(),
         p.seconds() / units::to_ps(p.simulated_time),
         p.steps_per_build(),
