@@ -331,11 +331,8 @@ fn forces_match_a_direct_sum_in_an_orthorhombic_box() {
         }
     }
     let scale = f.iter().map(|x| x.length()).fold(0.0, f64::max);
-    for i in 0..n {
-        assert!(
-            (md.forces()[i] - f[i]).length() < 1e-12 * scale,
-            "force {i}"
-        );
+    for (i, (a, b)) in md.forces().iter().zip(&f).enumerate() {
+        assert!((*a - *b).length() < 1e-12 * scale, "force {i}");
     }
     assert!((md.energy().potential - u).abs() < 1e-12 * u.abs());
 }

@@ -13,7 +13,6 @@
 //!    Nezbeda (Fluid Phase Equilib. 100, 1 (1994)), with the smoothing corrected to the full
 //!    potential from the measured g(r).
 
-mod eos;
 mod plot;
 
 use std::fmt::Write as _;
@@ -24,6 +23,7 @@ use glam::DVec3;
 use plot::{Axis, Curve};
 use potential::{LennardJones, LjRod, Smoothed};
 use smd::observe::{Correlations, Estimate, Observables, Rdf, detrended_std, slope};
+use smd::reference;
 use smd::{BodyModel, Integrator, Lattice, Orientations, Settings, Setup, System, units};
 
 struct Args {
@@ -566,42 +566,6 @@ struct LjResult {
     ns_per_particle_step: f64,
 }
 
-/// The correction from the smoothed to the full potential at first order in the difference,
-/// with the measured g(r) up to its range and g = 1 beyond (003 Eq. 26 changes nothing inside
-/// r_l):
-/// `ΔU/N = 2πρ ∫ g (u − u_s) r² dr`, `ΔP = −(2π/3) ρ² ∫ g r³ (u' − u_s') dr`.
-fn smoothing_correction(rdf: &[(f64, f64)], pot: &Smoothed<LennardJones>, rho: f64) -> (f64, f64) {
-    let (r_l, _) = pot.window();
-    let u = |r: f64| 4.0 * (r.powi(-12) - r.powi(-6));
-    let du = |r: f64| 4.0 * (-12.0 * r.powi(-13) + 6.0 * r.powi(-7));
-    let (mut iu, mut ip) = (0.0, 0.0);
-    let width = rdf.get(1).map(|b| b.0 - rdf[0].0).unwrap_or(0.0);
-    let r_max = rdf.last().map(|b| b.0 + 0.5 * width).unwrap_or(0.0);
-    for &(r, g) in rdf {
-        if r + 0.5 * width <= r_l {
-            continue;
-        }
-        // Midpoint rule on sub-bins: the switch varies within a bin.
-        let sub = 20;
-        for k in 0..sub {
-            let x = r - 0.5 * width + (k as f64 + 0.5) * width / sub as f64;
-            if x <= r_l {
-                continue;
-            }
-            let (s, ds) = pot.switch(x);
-            let h = width / sub as f64;
-            iu += g * (1.0 - s) * u(x) * x * x * h;
-            ip += g * ((1.0 - s) * du(x) - ds * u(x)) * x * x * x * h;
-        }
-    }
-    // Beyond the histogram, g = 1 and u_s = 0: ∫ u r² dr and ∫ u' r³ dr in closed form.
-    let rm = r_max;
-    iu += 4.0 * (rm.powi(-9) / 9.0 - rm.powi(-3) / 3.0);
-    ip += 4.0 * (-(4.0 / 3.0) * rm.powi(-9) + 2.0 * rm.powi(-3));
-    let pi = std::f64::consts::PI;
-    (2.0 * pi * rho * iu, -(2.0 * pi / 3.0) * rho * rho * ip)
-}
-
 fn lj_run(n: usize, window: (f64, f64), eq: u64, prod: u64) -> Result<LjResult, String> {
     let rho = 0.5;
     let pot = Smoothed::new(
@@ -632,7 +596,7 @@ fn lj_run(n: usize, window: (f64, f64), eq: u64, prod: u64) -> Result<LjResult, 
     };
     let stats = md.run(prod, 10, &mut obs).map_err(|e| e.to_string())?;
     let rdf = obs.rdf.as_ref().map(|r| r.table()).unwrap_or_default();
-    let (du, dp) = smoothing_correction(&rdf, &pot, rho);
+    let (du, dp) = reference::smoothing_correction(&rdf, &pot, rho);
     let col =
         |f: fn(&smd::observe::SeriesRow) -> f64| -> Vec<f64> { obs.series.iter().map(f).collect() };
     let nf = n as f64;
@@ -655,14 +619,14 @@ fn lj_run(n: usize, window: (f64, f64), eq: u64, prod: u64) -> Result<LjResult, 
 }
 
 fn lennard_jones(r: &mut Report, args: &Args) {
-    let check = eos::self_check();
+    let check = reference::self_check();
     let (t0, rho) = (2.0, 0.5);
     let _ = writeln!(
         r.md,
         "### Lennard-Jones spheres against published thermodynamics\n\n\
          Reference: the equation of state of J. Kolafa and I. Nezbeda, Fluid Phase Equilib. \
-         100, 1 (1994), for the full 12-6 potential (implemented in `examples/validate/eos.rs` \
-         from the paper's formulas; it reproduces the check values printed with the SklogWiki \
+         100, 1 (1994), for the full 12-6 potential (`smd::reference`, written from the paper's \
+         formulas; it reproduces the check values printed with the SklogWiki \
          Fortran transcription to {check:.1e}, the single-precision literals of that Fortran). \
          At T* = {t0}, ρ* = {rho} it gives U/N = {:.4} ε and P = {:.4} ε/σ³.\n\n\
          The runs use the smoothed potential of 003 Eq. 26 (window r_l–r_u), dt = 0.005 τ, \
@@ -674,8 +638,8 @@ fn lennard_jones(r: &mut Report, args: &Args) {
          within three of them plus 0.01 ε in U/N and 0.02 in P (the equation of state's own \
          uncertainty at this point is of that order, and N = 500 carries a small finite-size \
          shift).\n",
-        eos::energy(t0, rho),
-        eos::pressure(t0, rho)
+        reference::energy(t0, rho),
+        reference::pressure(t0, rho)
     );
     let ok_check = r.check(check < 1e-5, format!("Kolafa–Nezbeda self-check {check:e}"));
     let _ = writeln!(
@@ -695,7 +659,7 @@ fn lennard_jones(r: &mut Report, args: &Args) {
         match lj_run(n, window, eq, prod) {
             Ok(x) => {
                 let t = x.temperature.mean;
-                let (u_kn, p_kn) = (eos::energy(t, rho), eos::pressure(t, rho));
+                let (u_kn, p_kn) = (reference::energy(t, rho), reference::pressure(t, rho));
                 let u = x.u_smooth.mean + x.du;
                 let p = x.p_smooth.mean + x.dp;
                 let ok = (u - u_kn).abs() <= 3.0 * x.u_smooth.error + 0.01
