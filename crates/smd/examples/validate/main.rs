@@ -261,6 +261,25 @@ fn rods(r: &mut Report, args: &Args) -> Option<Integrator<LjRod>> {
         );
     }
     r.md += "\n";
+    if let (Some(a), Some(b)) = (runs.first(), runs.get(1)) {
+        let ratio = a.fluct_per_body / b.fluct_per_body;
+        let verdict = if ratio > 8.0 {
+            "stable, but far outside the second-order regime: the energy arrives in jumps \
+             (energy figure), rare fast librations that the step cannot follow"
+        } else {
+            "close to the second-order regime over this run"
+        };
+        let _ = writeln!(
+            r.md,
+            "At the largest step ({} fs) the fluctuation is {ratio:.1}× that at {} fs (4 in the \
+             dt² regime) and E moves by {:.2e} kJ/mol per body over the run ({:.3} kT): \
+             {verdict}.\n",
+            a.dt_fs,
+            b.dt_fs,
+            a.drift * run_ps,
+            a.drift * run_ps / kt
+        );
+    }
     // Checks.
     let all = r.check(
         runs.len() == dts.len(),
