@@ -79,6 +79,14 @@ pub(crate) const CHECKS: &[Check] = &[
         full: &[],
         quick: &["--quick"],
     },
+    Check {
+        name: "smd",
+        title: "Standard MD reference: energy against time step and cost, reversibility, stability, Lennard-Jones against its equation of state",
+        package: "dmd-smd",
+        example: "validate",
+        full: &[],
+        quick: &["--quick"],
+    },
 ];
 
 pub(crate) fn run(args: &[String]) -> Result<(), String> {
