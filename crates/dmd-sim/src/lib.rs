@@ -58,6 +58,7 @@ pub mod scene;
 pub mod schedule;
 pub mod simulation;
 pub mod sum;
+pub mod terraced;
 
 /// The README's example, compiled and run as a doctest so it cannot go stale.
 #[cfg(doctest)]
