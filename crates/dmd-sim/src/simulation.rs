@@ -285,6 +285,7 @@ struct Phase {
     start: f64,
     virial: Compensated,
     kinetic_integral: Compensated,
+    translational_integral: Compensated,
     potential_integral: Compensated,
     last_change: f64,
 }
@@ -336,6 +337,7 @@ pub struct Simulation<M, S> {
     counters: Counters,
     anomalies: Anomalies,
     kinetic: f64,
+    translational: f64,
     potential: f64,
     phase: Phase,
     thermostat: Option<Andersen>,
@@ -487,6 +489,7 @@ where
             counters: Counters::default(),
             anomalies: Anomalies::default(),
             kinetic: 0.0,
+            translational: 0.0,
             potential: 0.0,
             phase: Phase {
                 start: settings.start_time,
@@ -507,6 +510,7 @@ where
             nan: None,
         };
         sim.kinetic = sim.kinetic_energy();
+        sim.translational = sim.translational_kinetic();
         sim.potential = sim.potential_energy();
         sim.predict_all();
         Ok(sim)
@@ -674,8 +678,18 @@ where
             PairClass::StepReflect => self.counters.step_reflect += 1,
             PairClass::Skipped => self.anomalies.receding += 1,
         }
-        if ex.delta_u != 0.0 {
-            self.energy_changes(-ex.delta_u, ex.delta_u);
+        if self.model.rotational_dof() > 0.0 {
+            // Impulses share kinetic energy between translation and rotation: track the
+            // translational part for the two temperatures.
+            let (mi, mj) = (
+                self.masses[bi.species as usize],
+                self.masses[bj.species as usize],
+            );
+            let dkt = 0.5 * mi * (vi.length_squared() - bi.v.length_squared())
+                + 0.5 * mj * (vj.length_squared() - bj.v.length_squared());
+            self.energy_changes(-ex.delta_u, ex.delta_u, dkt);
+        } else if ex.delta_u != 0.0 {
+            self.energy_changes(-ex.delta_u, ex.delta_u, -ex.delta_u);
         }
         self.phase.virial.add(ex.virial);
         self.bodies[iu].generation = self.bodies[iu].generation.wrapping_add(1);
@@ -881,13 +895,14 @@ where
             StandardNormal.sample(&mut self.rng),
             StandardNormal.sample(&mut self.rng),
         ) * scale;
-        let mut dk = 0.5 * m * (v.length_squared() - self.bodies[iu].v.length_squared());
+        let dkt = 0.5 * m * (v.length_squared() - self.bodies[iu].v.length_squared());
         self.bodies[iu].v = v;
         let species = self.bodies[iu].species;
-        dk += self
-            .model
-            .thermalize(i, species, self.now, th.temperature, &mut self.rng);
-        self.energy_changes(dk, 0.0);
+        let dk = dkt
+            + self
+                .model
+                .thermalize(i, species, self.now, th.temperature, &mut self.rng);
+        self.energy_changes(dk, 0.0, dkt);
         self.bodies[iu].generation = self.bodies[iu].generation.wrapping_add(1);
         self.lists.clear(i);
         self.model.forget(i);
@@ -897,18 +912,23 @@ where
         self.next_thermostat = self.now - (1.0 - u).ln() / (th.rate * f64::from(n));
     }
 
-    /// Records a change of kinetic and potential energy now (for the time integrals).
+    /// Records a change of kinetic energy `dk` (of which `dkt` translational) and potential
+    /// energy `du` now (for the time integrals).
     #[inline]
-    fn energy_changes(&mut self, dk: f64, du: f64) {
+    fn energy_changes(&mut self, dk: f64, du: f64, dkt: f64) {
         self.flush_integrals();
         self.kinetic += dk;
         self.potential += du;
+        self.translational += dkt;
     }
 
     fn flush_integrals(&mut self) {
         let dt = self.now - self.phase.last_change;
         if dt != 0.0 {
             self.phase.kinetic_integral.add(self.kinetic * dt);
+            self.phase
+                .translational_integral
+                .add(self.translational * dt);
             self.phase.potential_integral.add(self.potential * dt);
             self.phase.last_change = self.now;
         }
@@ -1085,6 +1105,7 @@ where
             self.predict_all();
         }
         self.kinetic = self.kinetic_energy();
+        self.translational = self.translational_kinetic();
         self.potential = self.potential_energy();
         self.counters = Counters::default();
         self.anomalies = Anomalies::default();
@@ -1246,6 +1267,11 @@ where
     /// `∫ K dt` of the phase.
     pub fn kinetic_integral(&self) -> f64 {
         self.phase.kinetic_integral.value()
+    }
+
+    /// `∫ K_rot dt` of the phase (rotational kinetic energy; 0 for spheres).
+    pub fn rotational_kinetic_integral(&self) -> f64 {
+        self.phase.kinetic_integral.value() - self.phase.translational_integral.value()
     }
 
     /// `∫ U dt` of the phase.

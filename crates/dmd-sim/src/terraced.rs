@@ -335,8 +335,8 @@ pub struct RodSpecies {
     pub inertia: f64,
 }
 
-/// A species-pair table: the two species, the smooth potential, the terrace map.
-pub type PairTable<P> = ((usize, usize), P, TerraceMap);
+/// A species-pair table: the two species and their terraced potential.
+pub type PairTable<P> = ((usize, usize), PairTerraces<P>);
 
 /// Rigid rods on terraced pair potentials (module documentation).
 #[derive(Clone, Debug)]
@@ -358,7 +358,7 @@ pub struct Terraced<P> {
 }
 
 impl<P: PairPotential> Terraced<P> {
-    /// Rods of `species` with pair potentials and terrace maps `pairs` (every unordered pair of
+    /// Rods of `species` with terraced pair potentials `pairs` (every unordered pair of
     /// species once); body `i` is of species `body_species[i]` (as the loop's bodies) with
     /// initial axis `axes[i]` and lab angular velocity `omegas[i]` (its component along the
     /// axis is dropped: rods have no spin) at time `t0`; searches with `settings`, the jitter
@@ -391,12 +391,12 @@ impl<P: PairPotential> Terraced<P> {
         }
         let mut table = vec![u32::MAX; ns * ns];
         let mut tables = Vec::with_capacity(pairs.len());
-        for ((a, b), pot, map) in pairs {
+        for ((a, b), terraces) in pairs {
             if a >= ns || b >= ns {
                 return Err(ModelError::MissingPair(a, b));
             }
             let k = tables.len() as u32;
-            tables.push(PairTerraces::new(pot, map)?);
+            tables.push(terraces);
             table[a * ns + b] = k;
             table[b * ns + a] = k;
         }

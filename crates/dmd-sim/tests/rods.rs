@@ -5,7 +5,7 @@ use collide::Particle;
 use dmd_sim::model::{PairModel, Stepped};
 use dmd_sim::potential::Potentials;
 use dmd_sim::simulation::{LoopSettings, NoSampler, Simulation, Stop};
-use dmd_sim::terraced::{RodSpecies, SearchSettings, Terraced, radial_steps};
+use dmd_sim::terraced::{PairTerraces, RodSpecies, SearchSettings, Terraced, radial_steps};
 use event_queue::{BoundedQueue, LazyQueue, Ticket};
 use glam::DVec3;
 use potential::{LennardJones, LjRod, PairPotential, TerraceMap, TerraceOptions, profile};
@@ -51,7 +51,7 @@ fn rods_model<P: PairPotential>(
             mass: 1.0,
             inertia: 0.1,
         }],
-        vec![((0, 0), pot, map)],
+        vec![((0, 0), PairTerraces::new(pot, map).unwrap())],
         &vec![0; n],
         axes,
         omegas,
