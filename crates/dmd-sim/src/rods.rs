@@ -205,6 +205,11 @@ fn terrace_map<P: PairPotential, F: Fn(f64) -> f64>(
     TerraceMap::from_profile(profile_needed()?, placement, &layout, rule(step), &opts).map_err(err)
 }
 
+/// Default of `search.max_change`: steps limited to where `U` is predicted to cross at most
+/// this fraction of the terrace's width (see `docs/VALIDATION.md` for the misses and the cost
+/// against it).
+pub const DEFAULT_MAX_CHANGE: f64 = 0.5;
+
 /// The search settings of a rods scene (internal units): the scene's `[search]` with its
 /// defaults. The default maximum step is the paper's 4 fs carried over to any rods by the two
 /// time scales it resolves (003 §V.A): `min(0.076 √(I/kT), 0.0064 σ √(m/kT))` over the species
@@ -239,6 +244,7 @@ pub fn search_settings(scene: &Scene) -> SearchSettings {
         window: spec.window.unwrap_or(max_step),
         jitter: spec.jitter.unwrap_or(0.01),
         verify_step: spec.verify_step,
+        max_change: spec.max_change.unwrap_or(DEFAULT_MAX_CHANGE),
     }
 }
 

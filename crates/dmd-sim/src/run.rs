@@ -458,6 +458,7 @@ impl Context<'_> {
             (None, None) => unreachable!("checked"),
         };
         reporter.phase("production", stop);
+        let search0 = sim.model().search_stats();
         let wall = Instant::now();
         let cpu0 = thread_cpu_seconds();
         sim.run(stop, &mut observers, &mut |p| reporter.progress(p))?;
@@ -492,7 +493,11 @@ impl Context<'_> {
         };
         let rot_dof = sim.model().rotational_dof();
         let kt_trans = 2.0 * (mean_k - mean_rot) / (dof - rot_dof);
-        let search = sim.model().search_stats();
+        let search = sim
+            .model()
+            .search_stats()
+            .zip(search0)
+            .map(|(a, b)| a.since(&b));
         let u = self.units;
         let excess = if t > 0.0 {
             sim.virial() / (3.0 * t * volume)

@@ -341,6 +341,9 @@ pub struct SearchSpec {
     /// Validation: search every interval again on a uniform grid of this spacing (a time)
     /// and count the events the search missed.
     pub verify_step: Option<f64>,
+    /// Adaptive only: limit each step so that `U` is predicted to change by at most this
+    /// fraction of the terrace's width (`inf`: no limit).
+    pub max_change: Option<f64>,
 }
 
 /// Where the initial positions come from.
@@ -1144,6 +1147,20 @@ impl Scene {
             }
             if let Some(x) = sr.verify_step {
                 positive("search.verify_step", x)?;
+            }
+            if let Some(x) = sr.max_change {
+                if !(x > 0.0) {
+                    return Err(SceneError::invalid(
+                        "search.max_change",
+                        format!("must be a positive fraction or inf, got {x}"),
+                    ));
+                }
+                if sr.method != SearchMethodSpec::Adaptive {
+                    return Err(SceneError::invalid(
+                        "search.max_change",
+                        "only used with `method = \"adaptive\"`",
+                    ));
+                }
             }
         }
         if let Some(c) = &self.output.orientation_acf {

@@ -46,7 +46,7 @@ use rand::{RngExt, SeedableRng};
 use rand_distr::{Distribution, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;
 use rigid_free::LinearRotor;
-use root_search::{Adaptive, Crossing, Grid, Method, SearchError, SearchState, sphere_window};
+use root_search::{Adaptive, Crossing, Grid, Method, SearchError, SearchState};
 
 use crate::event::{Boundary, Kind};
 use crate::model::{Executed, PairClass, PairModel, PairSetupError};
@@ -82,6 +82,11 @@ pub struct SearchSettings {
     /// Validation mode: every search interval is searched again on a uniform grid of this
     /// spacing that examines every extremum (`None`: off).
     pub verify_step: Option<f64>,
+    /// Adaptive only: each step is also limited so that the linear prediction of `g` changes by
+    /// at most this fraction of the terrace's width (`Adaptive::with_max_change`): steps follow
+    /// the speed of `U`, so an excursion across a level and back within one maximum step is
+    /// still sampled. `+∞`: off.
+    pub max_change: f64,
 }
 
 impl SearchSettings {
@@ -94,6 +99,7 @@ impl SearchSettings {
             window: max_step,
             jitter: 0.01,
             verify_step: None,
+            max_change: f64::INFINITY,
         }
     }
 }
@@ -124,6 +130,24 @@ pub struct SearchStats {
     pub verify_misses: u64,
 }
 
+impl SearchStats {
+    /// The counts since `earlier` (a snapshot of the same run).
+    pub fn since(&self, earlier: &SearchStats) -> SearchStats {
+        SearchStats {
+            searches: self.searches - earlier.searches,
+            evaluations: self.evaluations - earlier.evaluations,
+            roots: self.roots - earlier.roots,
+            suspended: self.suspended - earlier.suspended,
+            deferred: self.deferred - earlier.deferred,
+            off_terrace: self.off_terrace - earlier.off_terrace,
+            misfits: self.misfits - earlier.misfits,
+            failures: self.failures - earlier.failures,
+            verified: self.verified - earlier.verified,
+            verify_misses: self.verify_misses - earlier.verify_misses,
+        }
+    }
+}
+
 /// One rod's free rotation since its last change at time `t`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Rod {
@@ -147,6 +171,8 @@ struct Band {
     hi: f64,
     /// `1 / (hi − lo)`, 0 for terrace 0.
     inv_width: f64,
+    /// The range of `U` on the terrace (`hi − U_min` for terrace 0).
+    width: f64,
     /// The largest centre distance at which `U` can reach either level.
     reach: f64,
     /// `ΔV` of crossing up (`+∞` into the core).
@@ -170,11 +196,7 @@ impl Band {
     }
 
     fn width(&self) -> f64 {
-        if self.inv_width == 0.0 {
-            self.hi.abs()
-        } else {
-            self.hi - self.lo
-        }
+        self.width
     }
 }
 
@@ -262,6 +284,11 @@ impl<P: PairPotential> PairTerraces<P> {
                     lo,
                     hi,
                     inv_width: if k == 0 { 0.0 } else { 1.0 / (hi - lo) },
+                    width: if k == 0 {
+                        hi - potential.minimum()
+                    } else {
+                        hi - lo
+                    },
                     reach: reach_lo.max(level_reach[k]),
                     up: energies
                         .get(k + 1)
@@ -321,8 +348,8 @@ impl<P: PairPotential> PairTerraces<P> {
 enum Pending {
     /// Start the search (the pair has just come within reach) at `at`, bracket end `end`.
     Start { at: f64, end: f64 },
-    /// Continue a suspended search.
-    Resume(SearchState),
+    /// Continue a suspended search; the speed `U̇` at its last sample.
+    Resume(SearchState, f64),
 }
 
 /// Mass and moment of inertia (about any axis through the centre perpendicular to the rod's
@@ -441,6 +468,13 @@ impl<P: PairPotential> Terraced<P> {
                 why: "> 0",
             }));
         }
+        if !(settings.max_change > 0.0) {
+            return Err(ModelError::Search(SearchError::BadSetting {
+                name: "max_change",
+                value: settings.max_change,
+                why: "> 0 (inf: off)",
+            }));
+        }
         if !(0.0..0.5).contains(&settings.jitter) {
             return Err(ModelError::Search(SearchError::BadSetting {
                 name: "jitter",
@@ -539,16 +573,33 @@ impl<P: PairPotential> Terraced<P> {
         let (wi, wj) = (ri.rotor.omega(), rj.rotor.omega());
         let pot = &pt.potential;
         let clamp = pt.clamp;
-        let mut first_u = f64::NAN;
-        let mut indicator = |t: f64| -> (f64, f64) {
-            let tau = t - now;
-            let g = PairGeometry::new(dr + dv * tau, ri.axis(t), rj.axis(t));
-            let (u, du) = match pot.evaluate(&g) {
+        // U and U̇ (003 Eq. 12) at time t, U clamped deep inside the core.
+        let pair_at = |t: f64| -> (f64, f64) {
+            let g = PairGeometry::new(dr + dv * (t - now), ri.axis(t), rj.axis(t));
+            match pot.evaluate(&g) {
                 Ok(e) if e.energy < clamp => (e.energy, e.rate(dv, wi, wj)),
                 _ => (clamp, 0.0),
+            }
+        };
+        let (t0, end, speed) = match from {
+            Pending::Start { at, end } => (at.max(now), end, f64::NAN),
+            Pending::Resume(s, udot) => (s.time(), s.end(), udot.abs()),
+        };
+        // A start evaluates its first sample here: its U checks the stored terrace and its U̇
+        // limits the steps. The search then finds that sample in the cache.
+        let first = match from {
+            Pending::Start { .. } => Some(pair_at(t0)),
+            Pending::Resume(..) => None,
+        };
+        let speed = first.map_or(speed, |(_, du)| du.abs());
+        let mut last = (t0, speed);
+        let mut indicator = |t: f64| -> (f64, f64) {
+            let (u, du) = match first {
+                Some(x) if t == t0 => x,
+                _ => pair_at(t),
             };
-            if first_u.is_nan() {
-                first_u = u;
+            if t >= last.0 {
+                last = (t, du.abs());
             }
             band.indicator(u, du)
         };
@@ -557,12 +608,14 @@ impl<P: PairPotential> Terraced<P> {
         } else {
             1.0
         };
-        let step = self.settings.max_step * jitter;
+        // The step follows the speed of U: at most `max_change` of the terrace's width per
+        // step at the speed of the call's first sample (never below 1 % of the maximum step).
+        let mut step = self.settings.max_step * jitter;
+        if self.settings.max_change < f64::INFINITY && speed > 0.0 {
+            let limit = self.settings.max_change * band.width / speed;
+            step = step.min(limit.max(0.01 * self.settings.max_step));
+        }
         let window = self.settings.window;
-        let (t0, end) = match from {
-            Pending::Start { at, end } => (at.max(now), end),
-            Pending::Resume(s) => (s.time(), s.end()),
-        };
         // A bracket without end (no relative motion: only rotation changes U) needs a window.
         let window = if end == f64::INFINITY && window == f64::INFINITY {
             1e4 * self.settings.max_step
@@ -574,13 +627,13 @@ impl<P: PairPotential> Terraced<P> {
                 .adaptive
                 .with_max_step(step)
                 .and_then(|m| m.start(&mut indicator, t0, end, Crossing::Falling, window)),
-            (SearchMethod::Adaptive, Pending::Resume(s)) => self
+            (SearchMethod::Adaptive, Pending::Resume(s, _)) => self
                 .adaptive
                 .with_max_step(step)
                 .and_then(|m| m.resume(&mut indicator, s, window)),
             (SearchMethod::Grid { threshold }, Pending::Start { .. }) => Grid::new(step, threshold)
                 .and_then(|m| m.start(&mut indicator, t0, end, Crossing::Falling, window)),
-            (SearchMethod::Grid { threshold }, Pending::Resume(s)) => {
+            (SearchMethod::Grid { threshold }, Pending::Resume(s, _)) => {
                 Grid::new(step, threshold).and_then(|m| m.resume(&mut indicator, s, window))
             }
         };
@@ -592,11 +645,12 @@ impl<P: PairPotential> Terraced<P> {
                 return None;
             }
         };
-        self.stats.evaluations += u64::from(report.evals);
-        if matches!(from, Pending::Start { .. }) && first_u.is_finite() {
+        // The cached first sample was evaluated once, here.
+        self.stats.evaluations += u64::from(report.evals.max(1));
+        if let Some((u0, _)) = first {
             // A pair that starts a search off its terrace has missed an event before.
-            let tol = 1e-6 * band.width();
-            if first_u < band.lo - tol || first_u > band.hi + tol {
+            let tol = 1e-6 * band.width;
+            if u0 < band.lo - tol || u0 > band.hi + tol {
                 self.stats.off_terrace += 1;
             }
         }
@@ -608,12 +662,7 @@ impl<P: PairPotential> Terraced<P> {
         if let Some(grid) = self.verify {
             self.stats.verified += 1;
             let mut reference = |t: f64| -> (f64, f64) {
-                let tau = t - now;
-                let g = PairGeometry::new(dr + dv * tau, ri.axis(t), rj.axis(t));
-                let (u, du) = match pot.evaluate(&g) {
-                    Ok(e) if e.energy < clamp => (e.energy, e.rate(dv, wi, wj)),
-                    _ => (clamp, 0.0),
-                };
+                let (u, du) = pair_at(t);
                 band.indicator(u, du)
             };
             // The same interval, searched again from where this call started.
@@ -629,6 +678,18 @@ impl<P: PairPotential> Terraced<P> {
                 && tg < checked_to - 1e-6 * self.settings.max_step
             {
                 self.stats.verify_misses += 1;
+                if std::env::var_os("DMD_DEBUG_MISSES").is_some() {
+                    eprintln!(
+                        "missed: pair ({i}, {j}) terrace {k} {band:?} search from {t0} to \
+                         {checked_to} (resumed: {}), fine grid root at {tg}",
+                        matches!(from, Pending::Resume(..))
+                    );
+                    for q in 0..=40 {
+                        let t = t0 + (checked_to - t0) * f64::from(q) / 40.0;
+                        let (u, du) = pair_at(t);
+                        eprintln!("  t {t:.9}  U {u:.9}  dU/dt {du:.6e}");
+                    }
+                }
             }
         }
         match report.outcome {
@@ -649,7 +710,9 @@ impl<P: PairPotential> Terraced<P> {
             }
             root_search::Outcome::Suspended(s) => {
                 self.stats.suspended += 1;
-                self.set_pending(i, j, Pending::Resume(s));
+                // The last sample is the state's (the search never samples past it).
+                let udot = if last.0 == s.time() { last.1 } else { f64::NAN };
+                self.set_pending(i, j, Pending::Resume(s, udot));
                 Some((s.time() - now, Kind::Virtual))
             }
             root_search::Outcome::NoRoot => None,
@@ -714,14 +777,11 @@ impl<P: PairPotential> PairModel for Terraced<P> {
         };
         let band = pt.bands[k as usize];
         // The bracket: while the centres are within the band's reach.
-        let w = match sphere_window(dr.to_array(), dv.to_array(), band.reach) {
-            Ok(w) => w?,
-            Err(_) => {
-                self.stats.failures += 1;
-                return None;
-            }
-        };
-        let (start, end) = w.after(0.0)?;
+        let (start, end) = bracket(dr, dv, band.reach * band.reach)?;
+        if start.is_nan() || end.is_nan() {
+            self.stats.failures += 1;
+            return None;
+        }
         let (start, end) = (now + start, now + end);
         if start > now {
             // Not yet within reach: start searching when the pair gets there.
@@ -973,6 +1033,41 @@ impl<P> Terraced<P> {
     }
 }
 
+/// The times `(enter, exit)` from now during which `|dr + dv t|² ≤ R²` (`enter = 0` for a pair
+/// already inside), or `None` if the pair never comes within `R` from now on. Each root is
+/// taken in the form without cancellation, as `root_search::sphere_window` (the tests compare
+/// them), with a quick exit for receding pairs outside and no square root before it.
+#[inline(always)]
+fn bracket(dr: DVec3, dv: DVec3, radius2: f64) -> Option<(f64, f64)> {
+    let r2 = dr.length_squared();
+    let b = dr.dot(dv);
+    let c = r2 - radius2;
+    if c > 0.0 {
+        if b >= 0.0 {
+            return None;
+        }
+        let v2 = dv.length_squared();
+        let disc = b * b - v2 * c;
+        if disc <= 0.0 {
+            return None;
+        }
+        let q = -b + disc.sqrt();
+        Some((c / q, q / v2))
+    } else {
+        let v2 = dv.length_squared();
+        if v2 == 0.0 {
+            return Some((0.0, f64::INFINITY));
+        }
+        let sq = (b * b - v2 * c).max(0.0).sqrt();
+        let exit = if b > 0.0 {
+            -c / (b + sq)
+        } else {
+            (-b + sq) / v2
+        };
+        Some((0.0, exit))
+    }
+}
+
 /// A lab angular velocity for a rod with axis `axis` drawn from equipartition at `kt`: each of
 /// the two components perpendicular to the axis Gaussian with variance `kT / I`.
 pub fn draw_omega(axis: DVec3, inertia: f64, kt: f64, rng: &mut Xoshiro256PlusPlus) -> DVec3 {
@@ -1010,4 +1105,64 @@ pub fn radial_steps<F: Fn(f64) -> f64>(
     }
     steps.sort_by(|a, b| a[0].total_cmp(&b[0]));
     Ok(steps)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+    use root_search::sphere_window;
+
+    proptest! {
+        /// The bracket agrees with the reference of `root_search`.
+        #[test]
+        fn bracket_matches_sphere_window(
+            r in prop::array::uniform3(-3.0f64..3.0),
+            v in prop::array::uniform3(-2.0f64..2.0),
+            radius in 0.5f64..2.0,
+        ) {
+            let (dr, dv) = (DVec3::from(r), DVec3::from(v));
+            prop_assume!(dv.length() > 1e-3);
+            let ours = bracket(dr, dv, radius * radius);
+            let reference = sphere_window(r, v, radius).unwrap().and_then(|w| w.after(0.0));
+            match (ours, reference) {
+                (Some((a, b)), Some((c, d))) => {
+                    prop_assert!((a - c).abs() <= 1e-9 * (1.0 + c.abs()), "enter {a} vs {c}");
+                    prop_assert!((b - d).abs() <= 1e-9 * (1.0 + d.abs()), "exit {b} vs {d}");
+                }
+                (None, None) => {}
+                (x, y) => {
+                    // Only a course tangent to within round-off may be judged differently.
+                    let b = dr.dot(dv);
+                    let closest = (dr - dv * (b / dv.length_squared())).length();
+                    prop_assert!((closest - radius).abs() < 1e-7, "{x:?} vs {y:?}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn bands_watch_both_levels() {
+        let b = Band {
+            lo: -1.0,
+            hi: 0.5,
+            inv_width: 1.0 / 1.5,
+            width: 1.5,
+            reach: 2.0,
+            up: 0.5,
+            down: -0.5,
+        };
+        // Positive inside, zero on either level, negative outside; slopes of ±U̇ at the levels.
+        assert!(b.indicator(0.0, 1.0).0 > 0.0);
+        assert_eq!(b.indicator(-1.0, 2.0), (0.0, 2.0));
+        assert_eq!(b.indicator(0.5, 2.0), (0.0, -2.0));
+        assert!(b.indicator(0.7, 0.0).0 < 0.0 && b.indicator(-1.2, 0.0).0 < 0.0);
+        // Terrace 0: only the level above.
+        let b0 = Band {
+            lo: f64::NEG_INFINITY,
+            inv_width: 0.0,
+            ..b
+        };
+        assert_eq!(b0.indicator(0.25, 3.0), (0.25, -3.0));
+    }
 }
