@@ -135,7 +135,7 @@ mod tests {
     fn the_papers_state_point_in_internal_units() {
         let u = Units::of(UnitSystem::Molecular);
         // T* = kT/ε = 1.4 with ε = 3 kJ/mol: T = 1.4 · 3000 / 8.314462618 K = 505.14 K.
-        let t = 1.4 * 3.0 * 1000.0 / 8.314_462_618;
+        let t = 1.4 * 3.0 * 1000.0 / 8.314_462_618_153_24;
         let kt = t * u.temperature;
         assert!((kt - 1.4 * 3.0 * PER_KJ_PER_MOL).abs() < 1e-9, "{kt}");
         // Thermal speed of the rods, √(kT/m) with m = 18 g/mol: 4.83 Å/ps.
