@@ -1395,13 +1395,36 @@ fn remove_key(doc: &mut toml::Table, parts: &[&str]) -> Result<(), String> {
     let (last, path) = parts.split_last().expect("a key has at least one part");
     let mut table = doc;
     let mut walked = String::new();
-    for part in path {
+    let mut iter = path.iter().peekable();
+    while let Some(part) = iter.next() {
         if !walked.is_empty() {
             walked.push('.');
         }
         walked.push_str(part);
         table = match table.get_mut(*part) {
             Some(toml::Value::Table(t)) => t,
+            // An array of tables: the next part picks the element (`pair.0.terraces.step=`).
+            Some(toml::Value::Array(a)) => {
+                let Some(index) = iter.next() else {
+                    return Err(format!("`{walked}` is an array, not a table"));
+                };
+                let len = a.len();
+                let k: usize = index
+                    .parse()
+                    .map_err(|_| format!("`{walked}` is an array: `{index}` is not an index"))?;
+                walked.push('.');
+                walked.push_str(index);
+                match a.get_mut(k) {
+                    Some(toml::Value::Table(t)) => t,
+                    Some(_) => return Err(format!("`{walked}` is not a table of the scene")),
+                    None => {
+                        return Err(format!(
+                            "`{}` has {len} elements, no index {k}",
+                            &walked[..walked.len() - index.len() - 1]
+                        ));
+                    }
+                }
+            }
             _ => return Err(format!("`{walked}` is not a table of the scene")),
         };
     }
@@ -1489,6 +1512,14 @@ events = 1000
         );
         let s =
             Scene::from_str_with(MINIMAL, &["run.events=".into(), "run.time=2".into()]).unwrap();
+        // Removing a key inside an element of an array of tables.
+        let e = Scene::from_str_with(MINIMAL, &["pair.0.steps=".into()]).unwrap_err();
+        assert!(e.to_string().contains("pair[0].steps"), "{e}");
+        let e = Scene::from_str_with(MINIMAL, &["pair.2.steps=".into()]).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "override `pair.2.steps=`: `pair` has 1 elements, no index 2"
+        );
         assert_eq!((s.run.events, s.run.time), (None, Some(2.0)));
         let e = Scene::from_str_with(MINIMAL, &["run.events.x=1".into()]).unwrap_err();
         assert_eq!(

@@ -355,3 +355,47 @@ fn nearly_parallel_and_nearly_perpendicular_encounters() {
         assert_eq!(sim.anomalies().total(), 0);
     }
 }
+
+/// The fine-grid verification counts the events a coarse grid search steps over (a grid of 0.03
+/// with no grazing detection), and none of the default adaptive search's. (Misses break the
+/// loop's debug invariant that stored terraces match U, so the checks are off here.)
+#[test]
+fn verification_catches_the_misses_of_a_coarse_grid() {
+    let rod = LjRod::new(1.0, 1.0, 0.33).unwrap();
+    let (l, r) = lattice(5, 0.5);
+    let n = r.len();
+    let v = dmd_sim::init::maxwell_boltzmann(&vec![1.0; n], 1.4, 6);
+    let axes: Vec<DVec3> = (0..n)
+        .map(|i| DVec3::new((i as f64).sin(), (2.3 * i as f64).cos(), 0.2).normalize())
+        .collect();
+    let omegas: Vec<DVec3> = (0..n)
+        .map(|i| DVec3::new((i as f64).cos(), -1.0, 0.5) * 8.0)
+        .collect();
+    let mut misses = Vec::new();
+    for search in [
+        SearchSettings {
+            method: dmd_sim::terraced::SearchMethod::Grid { threshold: 0.0 },
+            max_step: 0.03,
+            verify_step: Some(0.0005),
+            ..SearchSettings::paper(0.03)
+        },
+        SearchSettings {
+            verify_step: Some(0.0005),
+            ..SearchSettings::paper(0.005)
+        },
+    ] {
+        let map = TerraceMap::evenly_spaced(&rod, 0.7, &TerraceOptions::default()).unwrap();
+        let model = rods_model(rod, map, &axes, &omegas, search);
+        let mut s = settings(0.2);
+        s.debug_check_events = 0;
+        let mut sim: Simulation<_, Queue> =
+            Simulation::new(DVec3::splat(l), &r, &v, &vec![0; n], model, s).unwrap();
+        sim.run(Stop::Events(30_000), &mut NoSampler, &mut |_| {})
+            .unwrap();
+        let st = sim.model().search_stats().unwrap();
+        assert_eq!(st.verified, st.searches);
+        misses.push(st.verify_misses);
+    }
+    assert!(misses[0] > 10, "coarse grid: {misses:?}");
+    assert_eq!(misses[1], 0, "adaptive: {misses:?}");
+}
