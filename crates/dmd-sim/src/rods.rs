@@ -40,6 +40,8 @@ impl Plan {
     /// # Errors
     /// [`SceneError::Invalid`] naming the pair table whose potential or terraces fail.
     pub fn of(scene: &Scene) -> Result<Plan, SceneError> {
+        // Messages give energies in the scene's units.
+        let scale = crate::units::Units::of(scene.units).energy;
         let names: Vec<&str> = scene.species.iter().map(|s| s.name.as_str()).collect();
         let index = |n: &str| names.iter().position(|&m| m == n).expect("checked");
         let kt = scene.init.temperature;
@@ -57,10 +59,12 @@ impl Plan {
                     };
                     let lj =
                         LennardJones::new(epsilon, sigma).map_err(|e| potential_error(k, e))?;
-                    let prof = profile::lennard_jones(&lj).map_err(|e| terrace_error(k, e))?;
+                    let prof =
+                        profile::lennard_jones(&lj).map_err(|e| terrace_error(k, e, scale))?;
                     let t = p.terraces.as_ref().expect("checked");
-                    let map = terrace_map(k, &lj, Some(&prof), t, kt)?;
-                    let steps = radial_steps(&prof, &map).map_err(|e| terrace_error(k, e))?;
+                    let map = terrace_map(k, &lj, Some(&prof), t, kt, scale)?;
+                    let steps =
+                        radial_steps(&prof, &map).map_err(|e| terrace_error(k, e, scale))?;
                     tables.push(((index(&p.species[0]), index(&p.species[1])), steps));
                 }
                 Ok(Plan::Spheres(Potentials::from_tables(names.len(), &tables)))
@@ -78,9 +82,9 @@ impl Plan {
                     };
                     let rod =
                         LjRod::new(epsilon, sigma, zeta).map_err(|e| potential_error(k, e))?;
-                    let prof = profile::rods(&rod).map_err(|e| terrace_error(k, e))?;
+                    let prof = profile::rods(&rod).map_err(|e| terrace_error(k, e, scale))?;
                     let t = p.terraces.as_ref().expect("checked");
-                    let map = terrace_map(k, &rod, Some(&prof), t, kt)?;
+                    let map = terrace_map(k, &rod, Some(&prof), t, kt, scale)?;
                     let terraces = PairTerraces::new(rod, map).map_err(|e| {
                         SceneError::invalid(format!("pair[{k}].terraces"), e.to_string())
                     })?;
@@ -106,7 +110,7 @@ impl Plan {
                         .map_err(|e| potential_error(k, e))?;
                     let t = p.terraces.as_ref().expect("checked");
                     let none: Option<&Profile<fn(f64) -> f64>> = None;
-                    let map = terrace_map(k, &gb, none, t, kt)?;
+                    let map = terrace_map(k, &gb, none, t, kt, scale)?;
                     let terraces = PairTerraces::new(gb, map).map_err(|e| {
                         SceneError::invalid(format!("pair[{k}].terraces"), e.to_string())
                     })?;
@@ -141,8 +145,31 @@ fn potential_error(k: usize, e: potential::PotentialError) -> SceneError {
     SceneError::invalid(format!("pair[{k}].potential"), e.to_string())
 }
 
-fn terrace_error(k: usize, e: potential::PotentialError) -> SceneError {
-    SceneError::invalid(format!("pair[{k}].terraces"), e.to_string())
+/// A terrace map's error for pair table `k`, energies divided by `scale` (internal per scene
+/// unit).
+fn terrace_error(k: usize, e: potential::PotentialError, scale: f64) -> SceneError {
+    let key = format!("pair[{k}].terraces");
+    let out = |x: f64| x / scale;
+    let problem = match e {
+        potential::PotentialError::LevelAtMinimum { level, minimum, .. } => format!(
+            "level {} lies on the potential's minimum {}: the terrace below it would have zero \
+             width (003 §V); choose another step or levels, or set `near_minimum = \"shift\"`",
+            out(level),
+            out(minimum)
+        ),
+        potential::PotentialError::LevelBelowMinimum { level, minimum } => format!(
+            "level {} lies below the potential's minimum {}: no pair can cross it",
+            out(level),
+            out(minimum)
+        ),
+        potential::PotentialError::LevelAboveCore { level, core } => format!(
+            "level {} is not below the hard-core level {}",
+            out(level),
+            out(core)
+        ),
+        e => e.to_string(),
+    };
+    SceneError::invalid(key, problem)
 }
 
 /// The terrace map of a pair table (003 Eq. 7 and the placement and step-energy rules).
@@ -152,8 +179,9 @@ fn terrace_map<P: PairPotential, F: Fn(f64) -> f64>(
     prof: Option<&Profile<F>>,
     t: &TerraceSpec,
     kt: f64,
+    scale: f64,
 ) -> Result<TerraceMap, SceneError> {
-    let err = |e| terrace_error(k, e);
+    let err = |e| terrace_error(k, e, scale);
     let mut opts = TerraceOptions::default();
     if let Some(c) = t.core {
         opts = opts.with_core(c);

@@ -361,7 +361,7 @@ impl Context<'_> {
             model,
             self.settings,
         )
-        .map_err(|e| setup_error(scene, self.config, e))?;
+        .map_err(|e| setup_error(scene, self.config, &self.units, e))?;
 
         // Equilibration.
         let andersen = (scene.thermostat.kind == ThermostatKind::Andersen).then(|| Andersen {
@@ -674,9 +674,33 @@ pub fn thread_cpu_seconds() -> Option<f64> {
     Some(ns * 1e-9)
 }
 
-fn setup_error(scene: &Scene, config: &Configuration, e: SetupError) -> RunError {
+fn setup_error(scene: &Scene, config: &Configuration, units: &Units, e: SetupError) -> RunError {
+    let name = |k: &u32| &scene.species[config.species[*k as usize] as usize].name;
     let (key, problem) = match (&e, scene.init.positions) {
         (SetupError::BoxTooSmall { .. }, _) => ("box", e.to_string()),
+        (SetupError::InsideCore { i, j, energy, core }, positions) => {
+            let what = format!(
+                "bodies {i} ({}) and {j} ({}) start with pair energy {:.6}, at or above the \
+                 hard-core level {} of the terraces",
+                name(i),
+                name(j),
+                units.energy_out(*energy),
+                units.energy_out(*core)
+            );
+            match positions {
+                Positions::File => (
+                    "init.file",
+                    format!("overlapping initial configuration: {what}"),
+                ),
+                _ => (
+                    "box.density",
+                    format!(
+                        "density too high for this lattice: {what}; lower the density or start \
+                         from a file"
+                    ),
+                ),
+            }
+        }
         (SetupError::Overlap { .. }, Positions::File) => (
             "init.file",
             format!("overlapping initial configuration: {e}"),
@@ -689,19 +713,16 @@ fn setup_error(scene: &Scene, config: &Configuration, e: SetupError) -> RunError
                 core,
             },
             _,
-        ) => {
-            let name = |k: &u32| &scene.species[config.species[*k as usize] as usize].name;
-            (
-                "box.density",
-                format!(
-                    "density too high for this lattice: it puts bodies {i} ({}) and {j} ({}) \
+        ) => (
+            "box.density",
+            format!(
+                "density too high for this lattice: it puts bodies {i} ({}) and {j} ({}) \
                      {distance:.6} apart, less than their hard-core diameter {core}; lower the \
                      density or start from a file",
-                    name(i),
-                    name(j)
-                ),
-            )
-        }
+                name(i),
+                name(j)
+            ),
+        ),
         _ => ("init.positions", e.to_string()),
     };
     SceneError::invalid(key, problem).into()
