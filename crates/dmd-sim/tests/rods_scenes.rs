@@ -181,7 +181,7 @@ fn a_level_on_the_minimum_is_refused_or_shifted() {
     let e = run_scene(&scene, Path::new("."), None, &mut Quiet).unwrap_err();
     assert!(
         e.to_string()
-            .starts_with("scene key `pair[0].terraces`: level -1 lies within"),
+            .starts_with("scene key `pair[0].terraces`: level -1 lies on the potential's minimum"),
         "{e}"
     );
     let mut shifted = bad.to_vec();
