@@ -24,6 +24,9 @@ use crate::terraced::{
     PairTable, PairTerraces, RodSpecies, SearchMethod, SearchSettings, draw_omega, radial_steps,
 };
 
+/// The type of an absent profile (Gay–Berne has none).
+type NoProfile = Profile<fn(f64) -> f64>;
+
 /// The interaction model a scene asks for, built (scene in internal units).
 pub enum Plan {
     /// Stepped radial potentials (given as steps, or Lennard-Jones terraces made radial).
@@ -109,7 +112,7 @@ impl Plan {
                     let gb = GayBerne::new(sigma0, epsilon0, kappa, kappa_prime, mu, nu)
                         .map_err(|e| potential_error(k, e))?;
                     let t = p.terraces.as_ref().expect("checked");
-                    let none: Option<&Profile<fn(f64) -> f64>> = None;
+                    let none: Option<&NoProfile> = None;
                     let map = terrace_map(k, &gb, none, t, kt, scale)?;
                     let terraces = PairTerraces::new(gb, map).map_err(|e| {
                         SceneError::invalid(format!("pair[{k}].terraces"), e.to_string())

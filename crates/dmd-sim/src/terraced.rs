@@ -461,14 +461,14 @@ impl<P: PairPotential> Terraced<P> {
             });
         }
         assert_eq!(body_species.len(), rods.len(), "one species per body");
-        if !(settings.window > 0.0) {
+        if settings.window.is_nan() || settings.window <= 0.0 {
             return Err(ModelError::Search(SearchError::BadSetting {
                 name: "window",
                 value: settings.window,
                 why: "> 0",
             }));
         }
-        if !(settings.max_change > 0.0) {
+        if settings.max_change.is_nan() || settings.max_change <= 0.0 {
             return Err(ModelError::Search(SearchError::BadSetting {
                 name: "max_change",
                 value: settings.max_change,
@@ -857,7 +857,8 @@ impl<P: PairPotential> PairModel for Terraced<P> {
         // round-off; anything more is an event that was not where it was predicted.
         let root_tol = 1e-10 * self.settings.max_step;
         let tol = 1e-9 * (level.abs() + band.width()) + 8.0 * udot.abs() * root_tol;
-        if !((e.energy - level).abs() <= tol) {
+        let off = (e.energy - level).abs();
+        if off.is_nan() || off > tol {
             self.stats.misfits += 1;
         }
         if !right_way {
