@@ -569,7 +569,7 @@ impl<P: PairPotential> Terraced<P> {
     ) -> Option<(f64, Kind)> {
         let pt = &self.pairs[self.table[si as usize * self.n_species + sj as usize] as usize];
         let band = pt.bands[k as usize];
-        let (ri, rj) = (self.rods[i as usize], self.rods[j as usize]);
+        let (ri, rj) = (&self.rods[i as usize], &self.rods[j as usize]);
         let (wi, wj) = (ri.rotor.omega(), rj.rotor.omega());
         let pot = &pt.potential;
         let clamp = pt.clamp;

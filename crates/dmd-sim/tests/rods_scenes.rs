@@ -250,3 +250,48 @@ fn the_thermostat_holds_both_temperatures() {
     assert!((rot - 2.0).abs() < 0.2, "{rot}");
     assert_eq!(s.anomalies, 0);
 }
+
+/// A scene in molecular units is the same physics as its internal numbers in reduced units:
+/// the same events, and the summary in kJ/mol and K.
+#[test]
+fn molecular_units_are_the_internal_numbers_scaled() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/rods-paper.toml");
+    let paper = std::fs::read_to_string(path).unwrap();
+    let short = [
+        "run.equilibration_time=0.1",
+        "run.time=0.1",
+        "output.rdf=",
+        "output.msd=",
+        "output.vacf=",
+        "output.orientation_acf=",
+        "output.series=false",
+    ];
+    let molecular = run(&paper, &short);
+    let kt = 505.144 * dmd_sim::units::GAS_CONSTANT;
+    let mut reduced: Vec<String> = short.iter().map(|s| (*s).to_owned()).collect();
+    reduced.extend([
+        "units=reduced".to_owned(),
+        format!("init.temperature={kt:e}"),
+        "pair.0.potential={ kind = \"rods\", epsilon = 300.0, sigma = 3.035, zeta = 1.0 }"
+            .to_owned(),
+    ]);
+    let reduced: Vec<&str> = reduced.iter().map(String::as_str).collect();
+    let reduced = run(&paper, &reduced);
+    assert_eq!(molecular.events, reduced.events);
+    assert_eq!(molecular.terrace_crossings, reduced.terrace_crossings);
+    let rel = |a: f64, b: f64| (a - b).abs() / b.abs();
+    assert!(rel(molecular.energy_total_end * 100.0, reduced.energy_total_end) < 1e-12);
+    assert!(
+        rel(
+            molecular.temperature * dmd_sim::units::GAS_CONSTANT,
+            reduced.temperature
+        ) < 1e-12
+    );
+    assert!(
+        rel(
+            molecular.pressure / dmd_sim::units::BAR_PER_UNIT,
+            reduced.pressure
+        ) < 1e-12
+    );
+    assert_eq!(molecular.sim_time, reduced.sim_time);
+}
