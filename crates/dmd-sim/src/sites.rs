@@ -1678,6 +1678,105 @@ pub fn random_orientations(
     (qs, ws)
 }
 
+/// The shipped molecules (reduced units: lengths in the diameter `σ` of the largest site).
+pub mod molecules {
+    use super::*;
+
+    /// A hard dumbbell: two sites of diameter 1 (site species 0), unit masses, at separation
+    /// `elongation` (`L* = L/σ`), with the hard-core table for [`Potentials::from_tables`].
+    ///
+    /// # Errors
+    /// A non-positive or non-finite elongation.
+    pub fn dumbbell(elongation: f64) -> Result<(MoleculeType, Potentials), SitesError> {
+        let t = MoleculeType::new(&[
+            SiteAtom {
+                position: DVec3::new(0.0, 0.0, -0.5 * elongation),
+                mass: 1.0,
+                species: 0,
+            },
+            SiteAtom {
+                position: DVec3::new(0.0, 0.0, 0.5 * elongation),
+                mass: 1.0,
+                species: 0,
+            },
+        ])?;
+        Ok((
+            t,
+            Potentials::from_tables(1, &[((0, 0), vec![[1.0, f64::INFINITY]])]),
+        ))
+    }
+
+    /// A methane-like molecule: a carbon-like site (species 0, mass 12) at the centre of a
+    /// regular tetrahedron of four hydrogen-like sites (species 1, mass 1) at 0.32 (C–H 1.09 Å
+    /// over σ_C = 3.4 Å). Hard cores with square wells: C–C core 1, well to 1.5, depth 1;
+    /// C–H core 0.75, well to 1.1, depth 0.25; H–H core 0.55, well to 0.8, depth 0.1. A
+    /// spherical rotor with tetrahedral sites (the companion application's methane, in spirit;
+    /// not its parameters).
+    pub fn methane_like() -> (MoleculeType, Potentials) {
+        let s = 0.32 / 3f64.sqrt();
+        let h = |x: f64, y: f64, z: f64| SiteAtom {
+            position: DVec3::new(x, y, z) * s,
+            mass: 1.0,
+            species: 1,
+        };
+        let atoms = [
+            SiteAtom {
+                position: DVec3::ZERO,
+                mass: 12.0,
+                species: 0,
+            },
+            h(1.0, 1.0, 1.0),
+            h(1.0, -1.0, -1.0),
+            h(-1.0, 1.0, -1.0),
+            h(-1.0, -1.0, 1.0),
+        ];
+        (
+            MoleculeType::new(&atoms).expect("a valid molecule"),
+            Potentials::from_tables(
+                2,
+                &[
+                    ((0, 0), vec![[1.0, f64::INFINITY], [1.5, -1.0]]),
+                    ((0, 1), vec![[0.75, f64::INFINITY], [1.1, -0.25]]),
+                    ((1, 1), vec![[0.55, f64::INFINITY], [0.8, -0.1]]),
+                ],
+            ),
+        )
+    }
+
+    /// A benzene-like planar ring: six carbon-like sites (species 0, mass 12) on a hexagon of
+    /// radius 0.41 (1.40 Å over σ_C = 3.4 Å) and six hydrogen-like sites (species 1, mass 1)
+    /// radially outside at 0.73. Hard cores with square wells as [`methane_like`] but C–C core
+    /// 0.95. A symmetric top (planar: `I₃ = I₁ + I₂`).
+    pub fn benzene_like() -> (MoleculeType, Potentials) {
+        let mut atoms = Vec::with_capacity(12);
+        for k in 0..6 {
+            let a = std::f64::consts::FRAC_PI_3 * f64::from(k);
+            let u = DVec3::new(a.cos(), a.sin(), 0.0);
+            atoms.push(SiteAtom {
+                position: 0.41 * u,
+                mass: 12.0,
+                species: 0,
+            });
+            atoms.push(SiteAtom {
+                position: 0.73 * u,
+                mass: 1.0,
+                species: 1,
+            });
+        }
+        (
+            MoleculeType::new(&atoms).expect("a valid molecule"),
+            Potentials::from_tables(
+                2,
+                &[
+                    ((0, 0), vec![[0.95, f64::INFINITY], [1.4, -1.0]]),
+                    ((0, 1), vec![[0.75, f64::INFINITY], [1.1, -0.25]]),
+                    ((1, 1), vec![[0.55, f64::INFINITY], [0.8, -0.1]]),
+                ],
+            ),
+        )
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1772,6 +1871,23 @@ mod tests {
         assert!((d.sites()[0].x.abs() - 0.25).abs() < 1e-15 && d.sites()[0].y == 0.0);
         assert!((d.moments().y - 2.0 * 0.25 * 0.25).abs() < 1e-15);
         assert_eq!(d.bonds().unwrap(), &[Bond::new(0, 1)]);
+    }
+
+    #[test]
+    fn shipped_molecules_have_their_symmetry() {
+        let (m, _) = molecules::methane_like();
+        assert_eq!(m.moments.kind(), rigid_free::BodyKind::Spherical);
+        assert!(m.bonds().is_ok());
+        let (b, _) = molecules::benzene_like();
+        assert_eq!(
+            b.moments.kind(),
+            rigid_free::BodyKind::Symmetric { axis: 2 }
+        );
+        assert!(b.bonds().is_err());
+        let (d, p) = molecules::dumbbell(0.6).unwrap();
+        assert!(d.is_linear() && (d.radius() - 0.3).abs() < 1e-15);
+        assert_eq!(p.get(0, 0).core(), Some(1.0));
+        assert!(molecules::dumbbell(0.0).is_err());
     }
 
     #[test]
