@@ -72,6 +72,14 @@ pub(crate) const CHECKS: &[Check] = &[
         quick: &["--quick"],
     },
     Check {
+        name: "sites",
+        title: "Site-based rigid molecules: conservation, contact vs constrained rule, missed events against search settings",
+        package: "dmd-sim",
+        example: "validate_sites",
+        full: &[],
+        quick: &["--quick"],
+    },
+    Check {
         name: "collide",
         title: "Impulse rules: conservation, constraints, reversibility and cross-check statistics",
         package: "dmd-collide",

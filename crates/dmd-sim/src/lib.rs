@@ -56,8 +56,10 @@ pub mod reference;
 pub mod rods;
 pub mod run;
 pub mod scene;
+// Issue 10: rigid site-based molecules (seed 000).
 pub mod schedule;
 pub mod simulation;
+pub mod sites;
 pub mod sum;
 pub mod terraced;
 pub mod units;
