@@ -64,6 +64,14 @@ pub(crate) const CHECKS: &[Check] = &[
         quick: &["--quick"],
     },
     Check {
+        name: "dmd-sim-rods",
+        title: "Rigid rods on terraced potentials: conservation, events per ps against the paper, missed events against cost, terrace rules, extreme cases",
+        package: "dmd-sim",
+        example: "validate_rods",
+        full: &[],
+        quick: &["--quick"],
+    },
+    Check {
         name: "collide",
         title: "Impulse rules: conservation, constraints, reversibility and cross-check statistics",
         package: "dmd-collide",

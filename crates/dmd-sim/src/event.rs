@@ -10,16 +10,23 @@
 //! moved on is dropped when it reaches the front of its list. A body's own change clears its
 //! list. Nothing is ever searched for to be cancelled.
 //!
-//! Rigid bodies (issue 7) add one kind: `Virtual { slot }`, a root search that reached the end
-//! of its window without finding the pair's next event; `slot` indexes the saved search state
-//! in the pair's stored entry, and when the event comes due the search resumes from it.
+//! Rigid bodies add one kind, [`Kind::Virtual`] (000 §III.B, 003 §V.A): a root search that
+//! reached the end of its window without finding the pair's next event. The saved search state
+//! stays with the interaction model (keyed by the owner and the partner, see
+//! [`terraced`](crate::terraced)), so the entry keeps its 16 bytes; when the event comes due and
+//! is still current, the model resumes the search from it.
 
 /// Which boundary of its current level a pair event is for.
+///
+/// For stepped radial potentials the boundaries are radii. For terraced potentials of rigid
+/// bodies (003 Eq. 7) they are the two levels around the pair's terrace: `Inner` is the level
+/// above (`U` rising towards the hard core, terrace `k → k + 1`), `Outer` the level below
+/// (`k → k − 1`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Boundary {
-    /// The inner boundary (a hard core, or the next step inwards).
+    /// The inner boundary (a hard core, or the next step inwards; the level above a terrace).
     Inner,
-    /// The outer boundary (leaving the level outwards).
+    /// The outer boundary (leaving the level outwards; the level below a terrace).
     Outer,
 }
 
@@ -31,6 +38,9 @@ pub enum Kind {
     /// The owner leaves the skin sphere around its neighbour-list centre: it rebuilds its
     /// list (see [`neighbour`](crate::neighbour)).
     Shell,
+    /// The root search of the pair (owner, partner) reached the end of its window, or the pair
+    /// reaches the bracket where a search must start: resume (or start) it then.
+    Virtual,
 }
 
 /// One predicted event in a body's list (16 bytes): its time, and a tag packing the kind with
@@ -50,6 +60,7 @@ const PARTNER_MASK: u32 = (1 << PARTNER_BITS) - 1;
 const INNER: u32 = 0;
 const OUTER: u32 = 1;
 const SHELL: u32 = 2;
+const VIRTUAL: u32 = 3;
 
 impl Event {
     /// A pair event with `partner` (at generation `generation`) at `boundary`.
@@ -58,6 +69,26 @@ impl Event {
         let kind = match boundary {
             Boundary::Inner => INNER,
             Boundary::Outer => OUTER,
+        };
+        Event {
+            time,
+            tag: (kind << PARTNER_BITS) | partner,
+            generation,
+        }
+    }
+
+    /// A pair event (`Kind::Pair`) or a virtual event (`Kind::Virtual`) with `partner` (at
+    /// generation `generation`).
+    ///
+    /// # Panics
+    /// For `Kind::Shell`, which has no partner (a bug of the caller).
+    #[inline(always)]
+    pub fn with_partner(time: f64, partner: u32, generation: u32, kind: Kind) -> Self {
+        let kind = match kind {
+            Kind::Pair(Boundary::Inner) => INNER,
+            Kind::Pair(Boundary::Outer) => OUTER,
+            Kind::Virtual => VIRTUAL,
+            Kind::Shell => panic!("a shell crossing has no partner"),
         };
         Event {
             time,
@@ -82,6 +113,7 @@ impl Event {
         match self.tag >> PARTNER_BITS {
             INNER => Kind::Pair(Boundary::Inner),
             OUTER => Kind::Pair(Boundary::Outer),
+            VIRTUAL => Kind::Virtual,
             _ => Kind::Shell,
         }
     }
@@ -246,6 +278,10 @@ mod tests {
         );
         let s = Event::shell(2.0);
         assert_eq!((s.partner(), s.kind()), (None, Kind::Shell));
+        let v = Event::with_partner(0.5, 12, 9, Kind::Virtual);
+        assert_eq!((v.partner(), v.kind()), (Some(12), Kind::Virtual));
+        let p = Event::with_partner(0.5, 12, 9, Kind::Pair(Boundary::Outer));
+        assert_eq!(p, Event::pair(0.5, 12, 9, Boundary::Outer));
     }
 
     #[test]

@@ -216,6 +216,73 @@ pub fn read_xyz(scene: &Scene, path: &Path) -> Result<Configuration, SceneError>
     })
 }
 
+/// Reads the orientations of rods from the first frame of an extended XYZ file: the
+/// `orientation:R:4` column of its `Properties` (unit quaternions with the scalar last, as
+/// `dmd` writes them); each body's axis is the quaternion's image of `z`.
+///
+/// # Errors
+/// [`SceneError::Invalid`] naming `init.orientations` for a file without the column or with
+/// bad numbers.
+pub fn read_orientations(path: &Path, n: usize) -> Result<Vec<DVec3>, SceneError> {
+    let key = "init.orientations";
+    let err = |msg: String| SceneError::invalid(key, format!("{}: {msg}", path.display()));
+    let text = std::fs::read_to_string(path).map_err(|e| err(e.to_string()))?;
+    let mut lines = text.lines().skip(1);
+    let comment = lines.next().unwrap_or("");
+    let props = comment
+        .split_whitespace()
+        .find_map(|w| w.strip_prefix("Properties="))
+        .ok_or_else(|| {
+            err("no Properties=… in the comment line, so no orientation column".into())
+        })?;
+    let fields: Vec<&str> = props.split(':').collect();
+    let mut column = 0;
+    let mut at = None;
+    for f in fields.chunks(3) {
+        let [name, _, count] = f else {
+            return Err(err(format!("malformed Properties={props}")));
+        };
+        let count: usize = count
+            .parse()
+            .map_err(|_| err(format!("malformed Properties={props}")))?;
+        if *name == "orientation" {
+            if count != 4 {
+                return Err(err("the orientation column must have 4 components".into()));
+            }
+            at = Some(column);
+        }
+        column += count;
+    }
+    let at = at.ok_or_else(|| err("the file has no orientation:R:4 column".into()))?;
+    let mut axes = Vec::with_capacity(n);
+    for k in 0..n {
+        let line = lines
+            .next()
+            .ok_or_else(|| err(format!("ends after {k} of {n} bodies")))?;
+        let v: Vec<f64> = line
+            .split_whitespace()
+            .skip(at)
+            .take(4)
+            .map(|x| x.parse::<f64>().unwrap_or(f64::NAN))
+            .collect();
+        let q = glam::DQuat::from_xyzw(
+            *v.first().unwrap_or(&f64::NAN),
+            *v.get(1).unwrap_or(&f64::NAN),
+            *v.get(2).unwrap_or(&f64::NAN),
+            *v.get(3).unwrap_or(&f64::NAN),
+        );
+        let len = q.length();
+        if !(len.is_finite() && len > 0.5 && len < 2.0) {
+            return Err(err(format!(
+                "line {}: the orientation is not a unit quaternion",
+                k + 3
+            )));
+        }
+        axes.push((q / len) * DVec3::Z);
+    }
+    Ok(axes)
+}
+
 /// The box of an extended-XYZ comment line (orthorhombic lattices only).
 fn parse_lattice(comment: &str) -> Result<Option<DVec3>, String> {
     let Some(start) = comment.find("Lattice=\"") else {

@@ -53,11 +53,14 @@ pub mod output;
 pub mod pair_state;
 pub mod potential;
 pub mod reference;
+pub mod rods;
 pub mod run;
 pub mod scene;
 pub mod schedule;
 pub mod simulation;
 pub mod sum;
+pub mod terraced;
+pub mod units;
 
 /// The README's example, compiled and run as a doctest so it cannot go stale.
 #[cfg(doctest)]

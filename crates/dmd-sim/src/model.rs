@@ -19,9 +19,9 @@
 use collide::{Outcome, Particle, spheres};
 use glam::DVec3;
 
-use crate::event::Boundary;
+use crate::event::{Boundary, Kind};
 use crate::pair_state::PairStates;
-use crate::potential::{Level, Potentials};
+use crate::potential::{Level, Potentials, StepPotential};
 
 /// What executing a pair event did.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -55,29 +55,91 @@ pub struct Executed {
 /// Relative tolerance on squared distances below which an overlap counts as round-off.
 pub const OVERLAP_TOLERANCE: f64 = 1e-9;
 
+/// Why a pair cannot start where it is.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PairSetupError {
+    /// The centres are closer than the hard-core diameter.
+    Overlap {
+        /// Their distance.
+        distance: f64,
+        /// The hard-core diameter.
+        core: f64,
+    },
+    /// The smooth pair potential is at or above the hard-core level of the terrace map (the
+    /// bodies overlap more than the terraced potential allows).
+    InsideCore {
+        /// `U` of the pair.
+        energy: f64,
+        /// The hard-core level.
+        core: f64,
+    },
+}
+
 /// An interaction model for the event loop.
+///
+/// The loop knows bodies only by their translational record ([`Body`](crate::body::Body));
+/// everything else a model needs (stored pair levels, orientations, saved searches) it keeps
+/// itself, indexed like the bodies. The rotation hooks have do-nothing defaults, so spheres pay
+/// nothing for them: the loop is compiled per model and the calls vanish.
 pub trait PairModel {
     /// The largest distance at which two bodies interact (the smallest cell side).
     fn reach(&self) -> f64;
 
-    /// The particle (mass) of species `s`.
-    fn particle(&self, s: u32) -> &Particle;
+    /// Number of species.
+    fn n_species(&self) -> usize;
 
-    /// The next event of pair `(i, j)`, of species `(si, sj)`, whose relative position and
-    /// velocity are `dr = r_i − r_j` and `dv = v_i − v_j` now: the time from now and the
-    /// boundary.
-    fn predict(
-        &self,
+    /// The mass of species `s`.
+    fn mass(&self, s: u32) -> f64;
+
+    /// Sets up the stored state of pair `(i, j)`, of species `(si, sj)`, at separation
+    /// `dr = r_i − r_j` (initial configuration; called once per pair within the neighbour-list
+    /// radius).
+    ///
+    /// # Errors
+    /// The pair overlaps a hard core.
+    fn setup_pair(
+        &mut self,
         i: u32,
         j: u32,
         si: u32,
         sj: u32,
         dr: DVec3,
-        dv: DVec3,
-    ) -> Option<(f64, Boundary)>;
+    ) -> Result<(), PairSetupError>;
 
-    /// Executes a pair event at separation `dr = r_i − r_j`, updating the velocities and the
-    /// stored pair state.
+    /// The next event of pair `(i, j)`, of species `(si, sj)`, whose relative position and
+    /// velocity are `dr = r_i − r_j` and `dv = v_i − v_j` at time `now`: the time from now and
+    /// its kind ([`Kind::Pair`] or, for models with root searches, [`Kind::Virtual`]).
+    #[allow(clippy::too_many_arguments)]
+    fn predict(
+        &mut self,
+        i: u32,
+        j: u32,
+        si: u32,
+        sj: u32,
+        now: f64,
+        dr: DVec3,
+        dv: DVec3,
+    ) -> Option<(f64, Kind)>;
+
+    /// A virtual event of owner `i` with partner `j` has come due (both unchanged since it was
+    /// scheduled): continue the pair's search. Models without virtual events never get one.
+    #[allow(clippy::too_many_arguments)]
+    fn resume(
+        &mut self,
+        _i: u32,
+        _j: u32,
+        _si: u32,
+        _sj: u32,
+        _now: f64,
+        _dr: DVec3,
+        _dv: DVec3,
+    ) -> Option<(f64, Kind)> {
+        None
+    }
+
+    /// Executes a pair event at time `now` and separation `dr = r_i − r_j`, updating the
+    /// velocities and the stored pair state (and, for rigid bodies, the angular velocities the
+    /// model keeps).
     ///
     /// # Errors
     /// The impulse rule's error for a non-finite state (a broken invariant upstream).
@@ -88,20 +150,91 @@ pub trait PairModel {
         j: u32,
         si: u32,
         sj: u32,
+        now: f64,
         boundary: Boundary,
         dr: DVec3,
         vi: &mut DVec3,
         vj: &mut DVec3,
     ) -> Result<Executed, collide::CollideError>;
 
-    /// The stored level of pair `(i, j)` (0 for models that store none).
-    fn level(&self, i: u32, j: u32) -> u16;
+    /// The potential energy of pair `(i, j)` on its stored level.
+    fn pair_energy(&self, i: u32, j: u32, si: u32, sj: u32) -> f64;
 
-    /// Sets the stored level (initial configuration).
-    fn set_level(&mut self, i: u32, j: u32, level: u16);
+    /// Checks the stored state of pair `(i, j)` at separation `dr` at time `now` against the
+    /// geometry (debug invariant checks): the stored level matches the distance or potential
+    /// (up to round-off at a boundary), no hard core overlaps, and a pair that interacts is
+    /// `listed` in the neighbour lists.
+    ///
+    /// # Errors
+    /// A description of the violation.
+    #[allow(clippy::too_many_arguments)]
+    fn check_pair(
+        &self,
+        i: u32,
+        j: u32,
+        si: u32,
+        sj: u32,
+        now: f64,
+        dr: DVec3,
+        listed: bool,
+    ) -> Result<(), String>;
 
-    /// The potentials.
-    fn potentials(&self) -> &Potentials;
+    /// Body `i`'s event list was cleared: predictions saved for it may go.
+    #[inline(always)]
+    fn forget(&mut self, _i: u32) {}
+
+    /// The time origin moves to `t0` (every body is brought to it first).
+    #[inline(always)]
+    fn rebase(&mut self, _t0: f64) {}
+
+    /// Rotational kinetic energy of all bodies (0 for spheres).
+    #[inline(always)]
+    fn rotational_kinetic(&self) -> f64 {
+        0.0
+    }
+
+    /// Rotational degrees of freedom of all bodies together (0 for spheres, 2 per rod).
+    #[inline(always)]
+    fn rotational_dof(&self) -> f64 {
+        0.0
+    }
+
+    /// A thermostat collision of body `i` (species `s`) at `now`: draws its angular velocity
+    /// afresh at temperature `kt`; returns the change of rotational kinetic energy.
+    #[inline(always)]
+    fn thermalize(
+        &mut self,
+        _i: u32,
+        _s: u32,
+        _now: f64,
+        _kt: f64,
+        _rng: &mut rand_xoshiro::Xoshiro256PlusPlus,
+    ) -> f64 {
+        0.0
+    }
+
+    /// The spin angular momentum `I ω` of body `i` (species `s`) about its centre (lab frame).
+    #[inline(always)]
+    fn spin(&self, _i: u32, _s: u32) -> DVec3 {
+        DVec3::ZERO
+    }
+
+    /// The lab angular velocity of body `i`.
+    #[inline(always)]
+    fn omega(&self, _i: u32) -> DVec3 {
+        DVec3::ZERO
+    }
+
+    /// The unit long axis of body `i` at `now` (`None` for bodies without orientation).
+    #[inline(always)]
+    fn axis(&self, _i: u32, _now: f64) -> Option<DVec3> {
+        None
+    }
+
+    /// Counters of the model's own work (root searches), if it has any.
+    fn search_stats(&self) -> Option<crate::terraced::SearchStats> {
+        None
+    }
 }
 
 /// Roots of `|dr + dv t|² = R²` for an approaching pair entering the sphere: the earliest
@@ -187,28 +320,43 @@ impl PairModel for HardSpheres {
         self.potentials.reach()
     }
 
-    #[inline(always)]
-    fn particle(&self, s: u32) -> &Particle {
-        &self.particles[s as usize]
+    fn n_species(&self) -> usize {
+        self.n_species
     }
 
-    #[inline(always)]
-    fn predict(
-        &self,
+    fn mass(&self, s: u32) -> f64 {
+        self.particles[s as usize].mass()
+    }
+
+    fn setup_pair(
+        &mut self,
         _i: u32,
         _j: u32,
         si: u32,
         sj: u32,
         dr: DVec3,
+    ) -> Result<(), PairSetupError> {
+        setup_stepped(self.potentials.get(si, sj), dr).map(|_| ())
+    }
+
+    #[inline(always)]
+    fn predict(
+        &mut self,
+        _i: u32,
+        _j: u32,
+        si: u32,
+        sj: u32,
+        _now: f64,
+        dr: DVec3,
         dv: DVec3,
-    ) -> Option<(f64, Boundary)> {
+    ) -> Option<(f64, Kind)> {
         let b = dr.dot(dv);
         if b >= 0.0 {
             return None;
         }
         let sigma2 = self.sigma2[si as usize * self.n_species + sj as usize];
         enter_time(dr.length_squared(), b, dv.length_squared(), sigma2)
-            .map(|t| (t, Boundary::Inner))
+            .map(|t| (t, Kind::Pair(Boundary::Inner)))
     }
 
     #[inline(always)]
@@ -218,6 +366,7 @@ impl PairModel for HardSpheres {
         _j: u32,
         si: u32,
         sj: u32,
+        _now: f64,
         boundary: Boundary,
         dr: DVec3,
         vi: &mut DVec3,
@@ -253,17 +402,68 @@ impl PairModel for HardSpheres {
         })
     }
 
-    fn level(&self, _i: u32, _j: u32) -> u16 {
-        0
+    fn pair_energy(&self, _i: u32, _j: u32, _si: u32, _sj: u32) -> f64 {
+        0.0
     }
 
-    fn set_level(&mut self, _i: u32, _j: u32, level: u16) {
-        debug_assert_eq!(level, 0, "hard spheres have no levels but 0");
+    fn check_pair(
+        &self,
+        i: u32,
+        j: u32,
+        si: u32,
+        sj: u32,
+        _now: f64,
+        dr: DVec3,
+        listed: bool,
+    ) -> Result<(), String> {
+        check_stepped(self.potentials.get(si, sj), i, j, 0, dr.length(), listed)
     }
+}
 
-    fn potentials(&self) -> &Potentials {
-        &self.potentials
+/// The level of a pair at separation `dr` on a stepped potential, or its overlap.
+fn setup_stepped(pot: &StepPotential, dr: DVec3) -> Result<usize, PairSetupError> {
+    let d = dr.length();
+    if let Some(core) = pot.core()
+        && d < core
+    {
+        return Err(PairSetupError::Overlap { distance: d, core });
     }
+    Ok(pot.level_at(d))
+}
+
+/// The invariants of a pair on a stepped potential at distance `d`, stored on `stored`.
+fn check_stepped(
+    pot: &StepPotential,
+    i: u32,
+    j: u32,
+    stored: usize,
+    d: f64,
+    listed: bool,
+) -> Result<(), String> {
+    if d < pot.reach() && !listed {
+        return Err(format!(
+            "pair ({i}, {j}) interacts at {d} but is not listed"
+        ));
+    }
+    if let Some(core) = pot.core()
+        && d * d < core * core * (1.0 - OVERLAP_TOLERANCE)
+    {
+        return Err(format!("bodies {i} and {j} overlap: distance {d} < {core}"));
+    }
+    let expected = pot.level_at(d);
+    if stored != expected && !pot.is_hard_sphere() {
+        // Allowed only at a boundary, within round-off.
+        let n = pot.radii().len();
+        let k = n - stored.max(expected);
+        let at = pot.radii()[k];
+        if (d - at).abs() > 1e-9 * at {
+            return Err(format!(
+                "pair ({i}, {j}) at distance {d} is stored on level {stored}, its distance \
+                 says level {expected}"
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// General stepped potentials with stored pair levels.
@@ -295,21 +495,40 @@ impl PairModel for Stepped {
         self.potentials.reach()
     }
 
-    #[inline(always)]
-    fn particle(&self, s: u32) -> &Particle {
-        &self.particles[s as usize]
+    fn n_species(&self) -> usize {
+        self.potentials.n_species()
     }
 
-    #[inline(always)]
-    fn predict(
-        &self,
+    fn mass(&self, s: u32) -> f64 {
+        self.particles[s as usize].mass()
+    }
+
+    fn setup_pair(
+        &mut self,
         i: u32,
         j: u32,
         si: u32,
         sj: u32,
         dr: DVec3,
+    ) -> Result<(), PairSetupError> {
+        let level = setup_stepped(self.potentials.get(si, sj), dr)?;
+        if level > 0 {
+            self.states.set(i, j, level as u16);
+        }
+        Ok(())
+    }
+
+    #[inline(always)]
+    fn predict(
+        &mut self,
+        i: u32,
+        j: u32,
+        si: u32,
+        sj: u32,
+        _now: f64,
+        dr: DVec3,
         dv: DVec3,
-    ) -> Option<(f64, Boundary)> {
+    ) -> Option<(f64, Kind)> {
         let levels = self.potentials.get(si, sj).levels();
         let r2 = dr.length_squared();
         let b = dr.dot(dv);
@@ -323,7 +542,7 @@ impl PairModel for Stepped {
         } else {
             self.states.get(i, j) as usize
         };
-        predict_level(&levels[level], r2, b, dv.length_squared())
+        predict_level(&levels[level], r2, b, dv.length_squared()).map(|(t, b)| (t, Kind::Pair(b)))
     }
 
     fn execute(
@@ -332,6 +551,7 @@ impl PairModel for Stepped {
         j: u32,
         si: u32,
         sj: u32,
+        _now: f64,
         boundary: Boundary,
         dr: DVec3,
         vi: &mut DVec3,
@@ -384,16 +604,53 @@ impl PairModel for Stepped {
         })
     }
 
-    #[inline(always)]
-    fn level(&self, i: u32, j: u32) -> u16 {
+    #[inline]
+    fn pair_energy(&self, i: u32, j: u32, si: u32, sj: u32) -> f64 {
+        let level = self.states.get(i, j);
+        if level == 0 {
+            return 0.0;
+        }
+        self.potentials.get(si, sj).levels()[level as usize].energy
+    }
+
+    fn check_pair(
+        &self,
+        i: u32,
+        j: u32,
+        si: u32,
+        sj: u32,
+        _now: f64,
+        dr: DVec3,
+        listed: bool,
+    ) -> Result<(), String> {
+        let stored = self.states.get(i, j) as usize;
+        check_stepped(
+            self.potentials.get(si, sj),
+            i,
+            j,
+            stored,
+            dr.length(),
+            listed,
+        )
+    }
+}
+
+impl Stepped {
+    /// The stored level of pair `(i, j)` (0 when out of range).
+    #[inline]
+    pub fn level(&self, i: u32, j: u32) -> u16 {
         self.states.get(i, j)
     }
 
-    fn set_level(&mut self, i: u32, j: u32, level: u16) {
-        self.states.set(i, j, level);
+    /// The potentials.
+    pub fn potentials(&self) -> &Potentials {
+        &self.potentials
     }
+}
 
-    fn potentials(&self) -> &Potentials {
+impl HardSpheres {
+    /// The potentials.
+    pub fn potentials(&self) -> &Potentials {
         &self.potentials
     }
 }

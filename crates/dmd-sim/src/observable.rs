@@ -1,5 +1,6 @@
-//! Observables sampled at fixed intervals of simulated time: radial distribution function,
-//! mean-square displacement, velocity autocorrelation, pressure and energy time series.
+//! Observables sampled at fixed intervals of simulated time: radial distribution function (of
+//! the centres), mean-square displacement, velocity autocorrelation, the long-axis
+//! orientational autocorrelation of rods, pressure and energy time series.
 //!
 //! Sampling reads positions `r + v (t − t_i)` without touching the bodies (no invalidation):
 //! asking for observables does not change the trajectory, and nothing here runs unless asked.
@@ -150,9 +151,12 @@ struct Origin {
     sample: u64,
     r0: Vec<DVec3>,
     v0: Vec<DVec3>,
+    s0: Vec<DVec3>,
 }
 
-/// Mean-square displacement and velocity autocorrelation over sliding time origins.
+/// Mean-square displacement, velocity autocorrelation and (for rods) the long-axis
+/// orientational autocorrelations `⟨s(0)·s(t)⟩` and `⟨P₂(s(0)·s(t))⟩` over sliding time
+/// origins.
 #[derive(Clone, Debug)]
 pub struct Correlations {
     dt: f64,
@@ -162,15 +166,29 @@ pub struct Correlations {
     origins: Vec<Origin>,
     msd: Vec<f64>,
     vacf: Vec<f64>,
+    oacf1: Vec<f64>,
+    oacf2: Vec<f64>,
     counts: Vec<u64>,
     want_msd: bool,
     want_vacf: bool,
+    want_oacf: bool,
 }
 
 impl Correlations {
     /// Lags `0, dt, …` up to `max_lag`; a new time origin every `max_lag / 10` (at least every
     /// sample).
     pub fn new(dt: f64, max_lag: f64, want_msd: bool, want_vacf: bool) -> Self {
+        Self::with_orientations(dt, max_lag, want_msd, want_vacf, false)
+    }
+
+    /// As [`new`](Self::new), and the orientational autocorrelation of rods if `want_oacf`.
+    pub fn with_orientations(
+        dt: f64,
+        max_lag: f64,
+        want_msd: bool,
+        want_vacf: bool,
+        want_oacf: bool,
+    ) -> Self {
         let lags = (max_lag / dt).round().max(1.0) as usize + 1;
         let origin_every = ((lags - 1) / 10).max(1) as u64;
         Correlations {
@@ -181,9 +199,12 @@ impl Correlations {
             origins: Vec::new(),
             msd: vec![0.0; lags],
             vacf: vec![0.0; lags],
+            oacf1: vec![0.0; lags],
+            oacf2: vec![0.0; lags],
             counts: vec![0; lags],
             want_msd,
             want_vacf,
+            want_oacf,
         }
     }
 
@@ -196,6 +217,11 @@ impl Correlations {
                 sample: k,
                 r0: (0..n).map(|i| view.unwrapped(i)).collect(),
                 v0: view.bodies.iter().map(|b| b.v).collect(),
+                s0: if self.want_oacf {
+                    view.axes.clone()
+                } else {
+                    Vec::new()
+                },
             });
         }
         let lags = self.lags as u64;
@@ -210,6 +236,17 @@ impl Correlations {
             }
             self.msd[lag] += m / n as f64;
             self.vacf[lag] += c / n as f64;
+            if self.want_oacf && o.s0.len() == view.axes.len() && !o.s0.is_empty() {
+                let (mut c1, mut c2) = (0.0, 0.0);
+                for (a, b) in o.s0.iter().zip(&view.axes) {
+                    let x = a.dot(*b);
+                    c1 += x;
+                    c2 += 1.5 * x * x - 0.5;
+                }
+                let k = o.s0.len() as f64;
+                self.oacf1[lag] += c1 / k;
+                self.oacf2[lag] += c2 / k;
+            }
             self.counts[lag] += 1;
         }
     }
@@ -222,6 +259,22 @@ impl Correlations {
     /// Rows `(lag, ⟨v(0)·v(t)⟩)` of the lags with data.
     pub fn vacf_table(&self) -> Vec<(f64, f64)> {
         self.table(&self.vacf)
+    }
+
+    /// Rows `(lag, ⟨s(0)·s(t)⟩, ⟨P₂(s(0)·s(t))⟩)` of the lags with data (rods).
+    pub fn oacf_table(&self) -> Vec<(f64, f64, f64)> {
+        (0..self.lags)
+            .filter(|&k| self.counts[k] > 0)
+            .map(|k| {
+                let c = self.counts[k] as f64;
+                (k as f64 * self.dt, self.oacf1[k] / c, self.oacf2[k] / c)
+            })
+            .collect()
+    }
+
+    /// Whether the orientational autocorrelation was asked for.
+    pub fn wants_oacf(&self) -> bool {
+        self.want_oacf
     }
 
     fn table(&self, acc: &[f64]) -> Vec<(f64, f64)> {

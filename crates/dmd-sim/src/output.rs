@@ -144,7 +144,8 @@ pub fn plot_svg(
 
 /// An extended XYZ trajectory (readable by OVITO): per frame the body count, a comment line
 /// with `Lattice`, `Properties=species:S:1:pos:R:3:velo:R:3:id:I:1` and `Time`, and one line per
-/// body. Written to `trajectory.xyz.partial` and renamed when the run ends.
+/// body. Rods add `orientation:R:4` (unit quaternion, scalar last) and `aspherical_shape:R:3`
+/// before the id. Written to `trajectory.xyz.partial` and renamed when the run ends.
 #[derive(Debug)]
 pub struct Trajectory {
     path: PathBuf,
@@ -153,6 +154,12 @@ pub struct Trajectory {
     names: Vec<String>,
     error: Option<String>,
     frames: u64,
+    shape: [f64; 3],
+}
+
+/// The unit quaternion (shortest arc) that turns `z` into `axis`.
+pub fn axis_quaternion(axis: glam::DVec3) -> glam::DQuat {
+    glam::DQuat::from_rotation_arc(glam::DVec3::Z, axis.normalize())
 }
 
 impl Trajectory {
@@ -170,7 +177,15 @@ impl Trajectory {
             names,
             error: None,
             frames: 0,
+            shape: [0.5, 0.5, 1.5],
         })
+    }
+
+    /// The same trajectory drawing rods as ellipsoids of semi-axes `shape` (for OVITO's
+    /// aspherical shape; the third is along the rod).
+    pub fn with_shape(mut self, shape: [f64; 3]) -> Self {
+        self.shape = shape;
+        self
     }
 
     /// Appends a frame (errors are kept and reported by [`finish`](Self::finish)).
@@ -181,9 +196,15 @@ impl Trajectory {
         let l = view.lengths;
         let mut go = || -> std::io::Result<()> {
             writeln!(self.out, "{}", view.bodies.len())?;
+            let rods = !view.axes.is_empty();
+            let props = if rods {
+                "species:S:1:pos:R:3:velo:R:3:orientation:R:4:aspherical_shape:R:3:id:I:1"
+            } else {
+                "species:S:1:pos:R:3:velo:R:3:id:I:1"
+            };
             writeln!(
                 self.out,
-                "Lattice=\"{} 0 0 0 {} 0 0 0 {}\" Properties=species:S:1:pos:R:3:velo:R:3:id:I:1 Time={} pbc=\"T T T\"",
+                "Lattice=\"{} 0 0 0 {} 0 0 0 {}\" Properties={props} Time={} pbc=\"T T T\"",
                 l.x, l.y, l.z, view.elapsed
             )?;
             for (i, b) in view.bodies.iter().enumerate() {
@@ -193,11 +214,23 @@ impl Trajectory {
                     p.y.rem_euclid(l.y),
                     p.z.rem_euclid(l.z),
                 );
-                writeln!(
+                write!(
                     self.out,
-                    "{} {:.10} {:.10} {:.10} {:.10} {:.10} {:.10} {}",
-                    self.names[b.species as usize], p.x, p.y, p.z, b.v.x, b.v.y, b.v.z, i
+                    "{} {:.10} {:.10} {:.10} {:.10} {:.10} {:.10} ",
+                    self.names[b.species as usize], p.x, p.y, p.z, b.v.x, b.v.y, b.v.z
                 )?;
+                if rods {
+                    // The rotation taking the body's long axis z to the rod's axis, as a unit
+                    // quaternion with the scalar last (OVITO's Orientation); the shape draws
+                    // the rod as an ellipsoid three times as long as it is wide.
+                    let q = axis_quaternion(view.axes[i]);
+                    write!(
+                        self.out,
+                        "{:.12} {:.12} {:.12} {:.12} {} {} {} ",
+                        q.x, q.y, q.z, q.w, self.shape[0], self.shape[1], self.shape[2]
+                    )?;
+                }
+                writeln!(self.out, "{i}")?;
             }
             Ok(())
         };

@@ -1,8 +1,9 @@
 //! Running a scene end to end: set-up, equilibration, production, summary and outputs.
 //!
-//! [`run_scene`] picks the interaction model (hard spheres or stepped) and the queue once and
-//! hands over to a loop compiled for that pair; everything scene-specific happens here, around
-//! the loop, never inside it.
+//! [`run_scene`] picks the interaction model (hard spheres, stepped, or terraced rods) and the
+//! queue once and hands over to a loop compiled for that pair; everything scene-specific
+//! happens here, around the loop, never inside it. Scenes in molecular units are converted to
+//! the internal units first and the summary back ([`units`](crate::units)).
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -13,14 +14,18 @@ use event_queue::{BoundedQueue, HeapQueue, LazyQueue, Ticket, TournamentTree};
 use glam::DVec3;
 use serde::Serialize;
 
-use crate::init::{Configuration, lattice, maxwell_boltzmann, read_xyz};
+use crate::init::{Configuration, lattice, maxwell_boltzmann, read_orientations, read_xyz};
 use crate::model::{HardSpheres, PairModel, Stepped};
 use crate::observable::{Correlations, Observers, Rdf, Series};
 use crate::output::{Curve, OutputError, Trajectory, plot_svg, write_atomically, write_csv};
-use crate::potential::Potentials;
-use crate::scene::{Positions, QueueKind, Scene, SceneError, ThermostatKind, ThermostatPhase};
+use crate::rods::{Plan, equipartitioned_omegas, random_axes, rod_species, search_settings};
+use crate::scene::{
+    Orientations, Positions, QueueKind, Scene, SceneError, ThermostatKind, ThermostatPhase,
+};
 use crate::schedule::Scheduler;
 use crate::simulation::{Andersen, LoopSettings, Progress, SetupError, SimError, Simulation, Stop};
+use crate::terraced::{PairTable, SearchStats, Terraced};
+use crate::units::Units;
 
 /// Most events between re-basings: generations are `u32` and every event list is rebuilt at a
 /// re-basing, so no generation can wrap round while an event predicted with it waits.
@@ -55,7 +60,9 @@ pub struct Quiet;
 impl Reporter for Quiet {}
 
 /// Energies, momentum and counters of a run, as written to `summary.json`. Units are the
-/// scene's (reduced, σ = m = kT = 1 by default); all averages are over production.
+/// scene's (reduced, σ = m = kT = 1 by default; in molecular units energies in kJ/mol,
+/// temperatures in K, pressures in bar, times in ps, lengths in Å); all averages are over
+/// production.
 #[derive(Clone, Debug, Serialize)]
 pub struct Summary {
     /// Events of production (pair events, cell crossings, thermostat collisions).
@@ -117,8 +124,35 @@ pub struct Summary {
     pub anomalies: u64,
     /// Anomalies by kind.
     pub anomalies_by_kind: BTreeMap<String, u64>,
-    /// Interaction model used (`hard-spheres` or `stepped`).
+    /// Interaction model used (`hard-spheres`, `stepped`, `terraced-rods`,
+    /// `terraced-gay-berne`).
     pub model: String,
+    /// The unit system of the numbers (`reduced` or `molecular`).
+    pub units: String,
+    /// Pair events (terrace crossings and reflections) per unit of simulated time: per ps in
+    /// molecular units (003 §V.B reports 4.7·10⁴ for its rods at ΔV = kT/2).
+    pub events_per_ps: f64,
+    /// Pair events per CPU second.
+    pub pair_events_per_cpu_second: f64,
+    /// Virtual events (root searches resumed at the end of their window, or started when a
+    /// pair comes within reach).
+    pub virtual_events: u64,
+    /// Terrace (or step) crossings, up and down.
+    pub terrace_crossings: u64,
+    /// Reflections, at finite steps and at the hard core.
+    pub reflections: u64,
+    /// Missed events detected during the run (rods): searches that found their pair off its
+    /// stored terrace, and events whose `U` was not at the predicted level beyond round-off.
+    pub detected_misses: u64,
+    /// Misses found by re-searching every interval on a fine grid (`search.verify_step`).
+    pub verified_misses: Option<u64>,
+    /// Counters of the root searches (rods).
+    pub search: Option<SearchStats>,
+    /// Translational temperature `2⟨K_trans⟩/(3N − 3)` (rods; equal to `temperature` for
+    /// spheres).
+    pub translational_temperature: f64,
+    /// Rotational temperature `⟨K_rot⟩/N` of rods (two degrees of freedom each).
+    pub rotational_temperature: Option<f64>,
     /// Queue used.
     pub queue: String,
     /// Entries pushed into the scheduler (each body's earliest event, re-set at every change).
@@ -151,19 +185,19 @@ pub fn run_scene(
     out: Option<&Path>,
     reporter: &mut dyn Reporter,
 ) -> Result<Summary, RunError> {
-    let potentials = Potentials::from_scene(scene);
-    let particles: Vec<Particle> = scene
-        .species
-        .iter()
-        .map(|s| Particle::new(s.mass).expect("masses are checked"))
-        .collect();
+    let units = Units::of(scene.units);
+    let scene = &scene.internal();
+    let plan = Plan::of(scene)?;
     // A lattice denser than the smallest hard core allows can hold no species; pairs of larger
     // cores that end up too close are reported by the set-up.
-    let smallest_core = potentials
-        .all()
-        .iter()
-        .filter_map(|p| p.core())
-        .fold(f64::INFINITY, f64::min);
+    let smallest_core = match &plan {
+        Plan::Spheres(potentials) => potentials
+            .all()
+            .iter()
+            .filter_map(|p| p.core())
+            .fold(f64::INFINITY, f64::min),
+        _ => 0.0,
+    };
     let smallest_core = if smallest_core.is_finite() {
         smallest_core
     } else {
@@ -183,7 +217,8 @@ pub fn run_scene(
         .collect();
     let velocities = maxwell_boltzmann(&masses, scene.init.temperature, scene.seed);
     let n = config.positions.len();
-    let skin = choose_skin(scene, &potentials, &config)?;
+    let hard = matches!(&plan, Plan::Spheres(p) if p.all_hard_spheres());
+    let skin = choose_skin(scene, plan.reach(), hard, &config)?;
     let settings = LoopSettings {
         rebase_events: scene
             .run
@@ -200,36 +235,93 @@ pub fn run_scene(
             message: e.to_string(),
         })?;
     }
-    let hard = potentials.all_hard_spheres();
     let ctx = Context {
         scene,
         config: &config,
         velocities: &velocities,
         settings,
         out,
+        units,
+        model_name: plan.name(),
     };
     type Bounded = LazyQueue<BoundedQueue<Ticket>>;
     type Heap = LazyQueue<HeapQueue<Ticket>>;
-    match (hard, scene.run.queue) {
-        (true, QueueKind::Bounded) => {
-            ctx.go::<_, Bounded>(HardSpheres::new(potentials, particles), true, reporter)
+    match plan {
+        Plan::Spheres(potentials) => {
+            let particles: Vec<Particle> = scene
+                .species
+                .iter()
+                .map(|s| Particle::new(s.mass).expect("masses are checked"))
+                .collect();
+            match (hard, scene.run.queue) {
+                (true, QueueKind::Bounded) => {
+                    ctx.go::<_, Bounded>(HardSpheres::new(potentials, particles), reporter)
+                }
+                (true, QueueKind::Heap) => {
+                    ctx.go::<_, Heap>(HardSpheres::new(potentials, particles), reporter)
+                }
+                (true, QueueKind::Tournament) => {
+                    ctx.go::<_, TournamentTree>(HardSpheres::new(potentials, particles), reporter)
+                }
+                (false, QueueKind::Bounded) => {
+                    ctx.go::<_, Bounded>(Stepped::new(potentials, particles, n), reporter)
+                }
+                (false, QueueKind::Heap) => {
+                    ctx.go::<_, Heap>(Stepped::new(potentials, particles, n), reporter)
+                }
+                (false, QueueKind::Tournament) => {
+                    ctx.go::<_, TournamentTree>(Stepped::new(potentials, particles, n), reporter)
+                }
+            }
         }
-        (true, QueueKind::Heap) => {
-            ctx.go::<_, Heap>(HardSpheres::new(potentials, particles), true, reporter)
+        Plan::Rods(tables) => {
+            let model = terraced_model(scene, base, &config, tables)?;
+            ctx.go_any_queue(model, reporter)
         }
-        (true, QueueKind::Tournament) => {
-            ctx.go::<_, TournamentTree>(HardSpheres::new(potentials, particles), true, reporter)
-        }
-        (false, QueueKind::Bounded) => {
-            ctx.go::<_, Bounded>(Stepped::new(potentials, particles, n), false, reporter)
-        }
-        (false, QueueKind::Heap) => {
-            ctx.go::<_, Heap>(Stepped::new(potentials, particles, n), false, reporter)
-        }
-        (false, QueueKind::Tournament) => {
-            ctx.go::<_, TournamentTree>(Stepped::new(potentials, particles, n), false, reporter)
+        Plan::GayBerne(tables) => {
+            let model = terraced_model(scene, base, &config, tables)?;
+            ctx.go_any_queue(model, reporter)
         }
     }
+}
+
+/// The terraced model of a rods scene: orientations and equipartitioned angular velocities.
+fn terraced_model<P: potential::PairPotential>(
+    scene: &Scene,
+    base: &Path,
+    config: &Configuration,
+    tables: Vec<PairTable<P>>,
+) -> Result<Terraced<P>, RunError> {
+    let n = config.positions.len();
+    let axes = match scene.init.orientations {
+        Orientations::Random => random_axes(n, scene.seed),
+        Orientations::Aligned => {
+            let a = glam::DVec3::from(scene.init.axis.expect("checked")).normalize();
+            vec![a; n]
+        }
+        Orientations::File => {
+            let file = scene.init.file.as_ref().expect("checked");
+            read_orientations(&base.join(file), n)?
+        }
+    };
+    let species = rod_species(scene);
+    let inertia: Vec<f64> = config
+        .species
+        .iter()
+        .map(|&s| species[s as usize].inertia)
+        .collect();
+    let omegas = equipartitioned_omegas(&axes, &inertia, scene.init.temperature, scene.seed);
+    Terraced::new(
+        species,
+        tables,
+        &config.species,
+        &axes,
+        &omegas,
+        0.0,
+        search_settings(scene),
+        scene.seed ^ 0x5ea2_c400_0000_0007,
+    )
+    .map_err(|e| SceneError::invalid("search", e.to_string()).into())
 }
 
 struct Context<'a> {
@@ -238,13 +330,26 @@ struct Context<'a> {
     velocities: &'a [DVec3],
     settings: LoopSettings,
     out: Option<&'a Path>,
+    units: Units,
+    model_name: &'static str,
 }
 
 impl Context<'_> {
+    fn go_any_queue<M: PairModel>(
+        &self,
+        model: M,
+        reporter: &mut dyn Reporter,
+    ) -> Result<Summary, RunError> {
+        match self.scene.run.queue {
+            QueueKind::Bounded => self.go::<_, LazyQueue<BoundedQueue<Ticket>>>(model, reporter),
+            QueueKind::Heap => self.go::<_, LazyQueue<HeapQueue<Ticket>>>(model, reporter),
+            QueueKind::Tournament => self.go::<_, TournamentTree>(model, reporter),
+        }
+    }
+
     fn go<M: PairModel, Q: Scheduler>(
         &self,
         model: M,
-        hard: bool,
         reporter: &mut dyn Reporter,
     ) -> Result<Summary, RunError> {
         let scene = self.scene;
@@ -256,7 +361,7 @@ impl Context<'_> {
             model,
             self.settings,
         )
-        .map_err(|e| setup_error(scene, self.config, e))?;
+        .map_err(|e| setup_error(scene, self.config, &self.units, e))?;
 
         // Equilibration.
         let andersen = (scene.thermostat.kind == ThermostatKind::Andersen).then(|| Andersen {
@@ -306,18 +411,20 @@ impl Context<'_> {
             }
             observers.rdf = Some(Rdf::new(rdf.bins as usize, r_max, rdf.every));
         }
-        if o.msd.is_some() || o.vacf.is_some() {
+        if o.msd.is_some() || o.vacf.is_some() || o.orientation_acf.is_some() {
             let lag = o
                 .msd
                 .iter()
                 .chain(o.vacf.iter())
+                .chain(o.orientation_acf.iter())
                 .map(|c| c.max_lag)
                 .fold(0.0, f64::max);
-            observers.correlations = Some(Correlations::new(
+            observers.correlations = Some(Correlations::with_orientations(
                 o.sample_interval.expect("checked"),
                 lag,
                 o.msd.is_some(),
                 o.vacf.is_some(),
+                o.orientation_acf.is_some(),
             ));
         }
         if o.series {
@@ -351,6 +458,7 @@ impl Context<'_> {
             (None, None) => unreachable!("checked"),
         };
         reporter.phase("production", stop);
+        let search0 = sim.model().search_stats();
         let wall = Instant::now();
         let cpu0 = thread_cpu_seconds();
         sim.run(stop, &mut observers, &mut |p| reporter.progress(p))?;
@@ -378,6 +486,19 @@ impl Context<'_> {
             k1
         };
         let kt = 2.0 * mean_k / dof;
+        let mean_rot = if t > 0.0 {
+            sim.rotational_kinetic_integral() / t
+        } else {
+            sim.model().rotational_kinetic()
+        };
+        let rot_dof = sim.model().rotational_dof();
+        let kt_trans = 2.0 * (mean_k - mean_rot) / (dof - rot_dof);
+        let search = sim
+            .model()
+            .search_stats()
+            .zip(search0)
+            .map(|(a, b)| a.since(&b));
+        let u = self.units;
         let excess = if t > 0.0 {
             sim.virial() / (3.0 * t * volume)
         } else {
@@ -392,6 +513,7 @@ impl Context<'_> {
             ("step_reflect", counters.step_reflect),
             ("shell_crossing", counters.shell),
             ("thermostat", counters.thermostat),
+            ("virtual", counters.virtual_),
             ("samples", counters.samples),
             ("rebases", counters.rebases),
         ]
@@ -402,6 +524,10 @@ impl Context<'_> {
             ("negative_time", anomalies.negative_time),
             ("overlap", anomalies.overlap),
             ("receding", anomalies.receding),
+            (
+                "search_failures",
+                search.map_or(0, |s: SearchStats| s.failures),
+            ),
         ]
         .into_iter()
         .map(|(k, v)| (k.to_owned(), v))
@@ -420,28 +546,44 @@ impl Context<'_> {
             n_bodies: n as u64,
             density: n / volume,
             box_lengths: lengths.to_array(),
-            temperature: kt,
+            temperature: u.temperature_out(kt),
             degrees_of_freedom: dof,
-            pressure: ideal + excess,
-            pressure_ideal: ideal,
-            pressure_excess: excess,
+            pressure: u.pressure_out(ideal + excess),
+            pressure_ideal: u.pressure_out(ideal),
+            pressure_excess: u.pressure_out(excess),
             compressibility: (ideal + excess) * volume / (n * kt),
             mean_free_time: n * t / (2.0 * pair_events as f64),
             collision_rate: 2.0 * pair_events as f64 / (n * t),
-            energy_kinetic: k1,
-            energy_potential: u1,
-            potential_energy_per_body: if t > 0.0 {
+            energy_kinetic: u.energy_out(k1),
+            energy_potential: u.energy_out(u1),
+            potential_energy_per_body: u.energy_out(if t > 0.0 {
                 sim.potential_integral() / t / n
             } else {
                 u1 / n
-            },
-            energy_total_start: e0,
-            energy_total_end: e1,
+            }),
+            energy_total_start: u.energy_out(e0),
+            energy_total_end: u.energy_out(e1),
             relative_energy_drift: (e1 - e0).abs() / e0.abs().max(k0),
             momentum_drift: (p1 - p0).length() / p_scale,
-            anomalies: anomalies.total(),
+            anomalies: anomalies.total() + search.map_or(0, |s| s.failures),
             anomalies_by_kind,
-            model: if hard { "hard-spheres" } else { "stepped" }.to_owned(),
+            model: self.model_name.to_owned(),
+            units: match scene.units {
+                crate::scene::UnitSystem::Reduced => "reduced",
+                crate::scene::UnitSystem::Molecular => "molecular",
+            }
+            .to_owned(),
+            events_per_ps: pair_events as f64 / t,
+            pair_events_per_cpu_second: pair_events as f64 / cpu_seconds,
+            virtual_events: counters.virtual_,
+            terrace_crossings: counters.step_in + counters.step_out,
+            reflections: counters.core + counters.step_reflect,
+            detected_misses: search.map_or(0, |s| s.off_terrace + s.misfits),
+            verified_misses: search.filter(|s| s.verified > 0).map(|s| s.verify_misses),
+            search,
+            translational_temperature: u.temperature_out(kt_trans),
+            rotational_temperature: (rot_dof > 0.0)
+                .then(|| u.temperature_out(2.0 * mean_rot / rot_dof)),
             queue: match scene.run.queue {
                 QueueKind::Bounded => "bounded",
                 QueueKind::Heap => "heap",
@@ -466,7 +608,7 @@ impl Context<'_> {
             files: Vec::new(),
         };
         if let Some(dir) = out {
-            summary.files = write_observables(dir, &mut observers, o.plots)?;
+            summary.files = write_observables(dir, &mut observers, o.plots, &self.units)?;
             let json = serde_json::to_string_pretty(&summary).expect("a summary serialises");
             write_atomically(&dir.join("summary.json"), json.as_bytes())?;
         }
@@ -482,10 +624,10 @@ impl Context<'_> {
 /// 0.1 or less; see docs/PERFORMANCE.md.)
 fn choose_skin(
     scene: &Scene,
-    potentials: &Potentials,
+    reach: f64,
+    hard: bool,
     config: &Configuration,
 ) -> Result<f64, SceneError> {
-    let reach = potentials.reach();
     let l = config.lengths;
     let fit = (l.min_element() / 3.0 - reach) / 2.0;
     if fit < 0.01 * reach {
@@ -520,11 +662,7 @@ fn choose_skin(
         1.0 / (std::f64::consts::SQRT_2 * std::f64::consts::PI * rho * reach * reach);
     // Stepped potentials have many more pair events per unit of path than hard spheres, so
     // list rebuilds are relatively rarer and a thinner skin (fewer candidates) pays.
-    let lower = if potentials.all_hard_spheres() {
-        0.25
-    } else {
-        0.1
-    };
+    let lower = if hard { 0.25 } else { 0.1 };
     let skin = (0.3 * mean_free_path).clamp(lower * reach, 2.0 * reach);
     Ok(skin.min(0.999 * fit))
 }
@@ -536,9 +674,33 @@ pub fn thread_cpu_seconds() -> Option<f64> {
     Some(ns * 1e-9)
 }
 
-fn setup_error(scene: &Scene, config: &Configuration, e: SetupError) -> RunError {
+fn setup_error(scene: &Scene, config: &Configuration, units: &Units, e: SetupError) -> RunError {
+    let name = |k: &u32| &scene.species[config.species[*k as usize] as usize].name;
     let (key, problem) = match (&e, scene.init.positions) {
         (SetupError::BoxTooSmall { .. }, _) => ("box", e.to_string()),
+        (SetupError::InsideCore { i, j, energy, core }, positions) => {
+            let what = format!(
+                "bodies {i} ({}) and {j} ({}) start with pair energy {:.6}, at or above the \
+                 hard-core level {} of the terraces",
+                name(i),
+                name(j),
+                units.energy_out(*energy),
+                units.energy_out(*core)
+            );
+            match positions {
+                Positions::File => (
+                    "init.file",
+                    format!("overlapping initial configuration: {what}"),
+                ),
+                _ => (
+                    "box.density",
+                    format!(
+                        "density too high for this lattice: {what}; lower the density or start \
+                         from a file"
+                    ),
+                ),
+            }
+        }
         (SetupError::Overlap { .. }, Positions::File) => (
             "init.file",
             format!("overlapping initial configuration: {e}"),
@@ -551,19 +713,16 @@ fn setup_error(scene: &Scene, config: &Configuration, e: SetupError) -> RunError
                 core,
             },
             _,
-        ) => {
-            let name = |k: &u32| &scene.species[config.species[*k as usize] as usize].name;
-            (
-                "box.density",
-                format!(
-                    "density too high for this lattice: it puts bodies {i} ({}) and {j} ({}) \
+        ) => (
+            "box.density",
+            format!(
+                "density too high for this lattice: it puts bodies {i} ({}) and {j} ({}) \
                      {distance:.6} apart, less than their hard-core diameter {core}; lower the \
                      density or start from a file",
-                    name(i),
-                    name(j)
-                ),
-            )
-        }
+                name(i),
+                name(j)
+            ),
+        ),
         _ => ("init.positions", e.to_string()),
     };
     SceneError::invalid(key, problem).into()
@@ -573,6 +732,7 @@ fn write_observables(
     dir: &Path,
     obs: &mut Observers,
     plots: bool,
+    units: &Units,
 ) -> Result<Vec<String>, OutputError> {
     let mut files = Vec::new();
     let mut table = |name: &str,
@@ -643,9 +803,43 @@ fn write_observables(
                 )),
             )?;
         }
+        if c.wants_oacf() {
+            let t = c.oacf_table();
+            table(
+                "oacf",
+                &["t", "s0_dot_st", "p2"],
+                t.iter().map(|&(x, a, b)| vec![x, a, b]).collect(),
+                Some((
+                    "Long-axis orientational autocorrelation",
+                    "t",
+                    "<s(0).s(t)>, <P2(s(0).s(t))>",
+                    vec![
+                        Curve {
+                            label: "<s(0).s(t)>",
+                            points: t.iter().map(|&(x, a, _)| (x, a)).collect(),
+                        },
+                        Curve {
+                            label: "<P2>",
+                            points: t.iter().map(|&(x, _, b)| (x, b)).collect(),
+                        },
+                    ],
+                )),
+            )?;
+        }
     }
     if let Some(s) = &obs.series {
-        let rows = s.rows();
+        let rows: Vec<crate::observable::SeriesRow> = s
+            .rows()
+            .iter()
+            .map(|r| crate::observable::SeriesRow {
+                time: r.time,
+                kinetic: units.energy_out(r.kinetic),
+                potential: units.energy_out(r.potential),
+                total: units.energy_out(r.total),
+                temperature: units.temperature_out(r.temperature),
+                pressure: units.pressure_out(r.pressure),
+            })
+            .collect();
         table(
             "series",
             &[

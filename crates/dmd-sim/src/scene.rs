@@ -78,6 +78,9 @@ pub struct Scene {
     /// Seed of every random number of the run (initial velocities, thermostat).
     #[serde(default = "default_seed")]
     pub seed: u64,
+    /// The unit system of every number in the scene (default `reduced`).
+    #[serde(default)]
+    pub units: UnitSystem,
     /// The periodic box.
     #[serde(rename = "box")]
     pub box_: BoxSpec,
@@ -96,6 +99,20 @@ pub struct Scene {
     /// What is written besides `summary.json`.
     #[serde(default)]
     pub output: OutputSpec,
+    /// Root searches of event times (terraced potentials of rods only).
+    pub search: Option<SearchSpec>,
+}
+
+/// The unit system of a scene's numbers.
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum UnitSystem {
+    /// Numbers as they are, with Boltzmann's constant 1 (temperatures are energies).
+    #[default]
+    Reduced,
+    /// Lengths in Å, masses in g/mol, energies in kJ/mol, times in ps, temperatures in K,
+    /// moments of inertia in g/mol·Å² (see [`units`](crate::units)).
+    Molecular,
 }
 
 fn default_seed() -> u64 {
@@ -126,13 +143,17 @@ pub struct SpeciesSpec {
     /// Mass (default 1).
     #[serde(default = "one")]
     pub mass: f64,
+    /// Moment of inertia about an axis through the centre perpendicular to the body's own:
+    /// the body is a rod (a linear rotor, 003 §V). Spheres have none.
+    pub inertia: Option<f64>,
 }
 
 fn one() -> f64 {
     1.0
 }
 
-/// A stepped radial pair potential between two species.
+/// The pair potential between two species: a stepped radial potential (`steps`), or a smooth
+/// potential (`potential`) on energy terraces (`terraces`, 003 Eq. 7).
 #[derive(Clone, Debug, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct PairSpec {
@@ -140,8 +161,189 @@ pub struct PairSpec {
     pub species: [String; 2],
     /// `[radius, energy step]` pairs with strictly increasing radii: crossing radius `r`
     /// inwards changes the pair energy by the step (`inf` = hard core, innermost only). The
-    /// energy beyond the last radius is zero.
+    /// energy beyond the last radius is zero. Empty when `potential` is given.
+    #[serde(default)]
     pub steps: Vec<[f64; 2]>,
+    /// A smooth pair potential, simulated on `terraces`.
+    pub potential: Option<PotentialSpec>,
+    /// The terraces of `potential`.
+    pub terraces: Option<TerraceSpec>,
+}
+
+/// A smooth pair potential (crate `potential`).
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum PotentialSpec {
+    /// The modified Lennard-Jones rods of 003 Eqs. 22–23.
+    Rods {
+        /// Well depth ε.
+        epsilon: f64,
+        /// Diameter σ.
+        sigma: f64,
+        /// Orientation shift ζ of the effective distance.
+        zeta: f64,
+    },
+    /// Lennard-Jones spheres (003 Eq. 22 with ζ = 0): terraces become radial steps with
+    /// analytic event times.
+    LennardJones {
+        /// Well depth ε.
+        epsilon: f64,
+        /// Diameter σ.
+        sigma: f64,
+    },
+    /// Gay–Berne GB(κ, κ', μ, ν) (defaults GB(3, 5, 2, 1)).
+    GayBerne {
+        /// Breadth σ₀.
+        sigma0: f64,
+        /// Energy scale ε₀.
+        epsilon0: f64,
+        /// Length-to-breadth ratio κ.
+        #[serde(default = "gb_kappa")]
+        kappa: f64,
+        /// Side-by-side to end-to-end well-depth ratio κ'.
+        #[serde(default = "gb_kappa_prime")]
+        kappa_prime: f64,
+        /// Exponent μ.
+        #[serde(default = "gb_mu")]
+        mu: f64,
+        /// Exponent ν.
+        #[serde(default = "one")]
+        nu: f64,
+    },
+}
+
+fn gb_kappa() -> f64 {
+    3.0
+}
+fn gb_kappa_prime() -> f64 {
+    5.0
+}
+fn gb_mu() -> f64 {
+    2.0
+}
+
+impl PotentialSpec {
+    /// Whether the potential depends on the orientations (bodies must then be rods).
+    pub fn is_anisotropic(&self) -> bool {
+        match self {
+            PotentialSpec::Rods { zeta, .. } => *zeta > 0.0,
+            PotentialSpec::LennardJones { .. } => false,
+            PotentialSpec::GayBerne { .. } => true,
+        }
+    }
+
+    /// The kind, as written in the scene.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            PotentialSpec::Rods { .. } => "rods",
+            PotentialSpec::LennardJones { .. } => "lennard-jones",
+            PotentialSpec::GayBerne { .. } => "gay-berne",
+        }
+    }
+}
+
+/// Where the terrace levels go (see `potential::Placement`).
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum PlacementSpec {
+    /// Evenly in `U`: the paper's `U_k = (k − ½) ΔV`.
+    #[default]
+    EqualEnergy,
+    /// Evenly in distance (effective distance for the rods).
+    EqualDistance,
+    /// Evenly in shell volume.
+    EqualVolume,
+}
+
+/// What energy each terrace gets (see `potential::StepEnergy`).
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum StepEnergySpec {
+    /// Every step `ΔV` (the paper).
+    #[default]
+    Equal,
+    /// The middle of each terrace's range of `U`.
+    Midpoint,
+    /// The shell average of `U`.
+    VolumeAverage,
+    /// Each terrace's share of `B₂` exact at the scene temperature.
+    Virial,
+}
+
+/// What to do with a level on the potential's minimum (a terrace of zero width, 003 §V).
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum NearMinimumSpec {
+    /// Refuse the scene.
+    #[default]
+    Refuse,
+    /// Move the level a quarter of the way to the next one.
+    Shift,
+}
+
+/// The energy terraces of a smooth potential (003 Eq. 7).
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct TerraceSpec {
+    /// The energy step ΔV between levels (and the step of the paper's equal steps).
+    pub step: Option<f64>,
+    /// Or: ΔV in units of kT at `init.temperature` (`0.5` is the paper's kT/2).
+    pub step_kt: Option<f64>,
+    /// Or: explicit levels `U_k`, ascending.
+    pub levels: Option<Vec<f64>>,
+    /// With `levels`: the energy of every terrace (one more than levels); shifted so that
+    /// far-apart pairs have 0.
+    pub energies: Option<Vec<f64>>,
+    /// Level placement between the first and last of the paper's levels (default
+    /// `equal-energy`).
+    #[serde(default)]
+    pub placement: PlacementSpec,
+    /// Terrace energies (default `equal`).
+    #[serde(default)]
+    pub step_energy: StepEnergySpec,
+    /// A level on the potential's minimum: `refuse` (default) or `shift`.
+    #[serde(default)]
+    pub near_minimum: NearMinimumSpec,
+    /// The hard-core level `U_core` (default 100 |U_min|).
+    pub core: Option<f64>,
+    /// Move the outermost level to this (negative) `U` (placement rules only).
+    pub outermost: Option<f64>,
+}
+
+/// How event times are searched (rods on terraced potentials).
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum SearchMethodSpec {
+    /// The adaptive search with cubic interpolation (003 §III).
+    #[default]
+    Adaptive,
+    /// The uniform grid (000 §III.A).
+    Grid,
+}
+
+/// Root-search settings.
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SearchSpec {
+    /// `adaptive` (default) or `grid`.
+    #[serde(default)]
+    pub method: SearchMethodSpec,
+    /// Maximum step of the adaptive search, or the grid spacing (a time).
+    pub max_step: Option<f64>,
+    /// How far one search call goes before a virtual event (a time; `inf`: no virtual
+    /// events). Default: `max_step`.
+    pub window: Option<f64>,
+    /// Relative random shortening of each call's step, in `[0, 0.5)` (default 0.01).
+    pub jitter: Option<f64>,
+    /// Grid only: extrema are examined where `|g|` at a grid point is below this energy
+    /// (default `inf`: every extremum).
+    pub grid_threshold: Option<f64>,
+    /// Validation: search every interval again on a uniform grid of this spacing (a time)
+    /// and count the events the search missed.
+    pub verify_step: Option<f64>,
+    /// Adaptive only: limit each step so that `U` is predicted to change by at most this
+    /// fraction of the terrace's width (`inf`: no limit).
+    pub max_change: Option<f64>,
 }
 
 /// Where the initial positions come from.
@@ -166,6 +368,24 @@ pub struct InitSpec {
     pub file: Option<PathBuf>,
     /// Temperature of the Maxwell–Boltzmann velocities (energy units, k = 1).
     pub temperature: f64,
+    /// Initial orientations of rods: `random` (default), `aligned` (along `axis`) or `file`.
+    #[serde(default)]
+    pub orientations: Orientations,
+    /// The common axis of `orientations = "aligned"`.
+    pub axis: Option<[f64; 3]>,
+}
+
+/// Where the initial orientations of rods come from.
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum Orientations {
+    /// Uniformly random on the sphere.
+    #[default]
+    Random,
+    /// All along `init.axis`.
+    Aligned,
+    /// The `orientation:R:4` column (unit quaternions, scalar last) of `init.file`.
+    File,
 }
 
 /// Thermostat kinds.
@@ -294,6 +514,8 @@ pub struct OutputSpec {
     pub msd: Option<CorrelationSpec>,
     /// Velocity autocorrelation → `vacf.csv`.
     pub vacf: Option<CorrelationSpec>,
+    /// Long-axis orientational autocorrelation of rods → `oacf.csv`.
+    pub orientation_acf: Option<CorrelationSpec>,
     /// Pressure and energy time series → `series.csv`.
     #[serde(default)]
     pub series: bool,
@@ -315,6 +537,7 @@ impl Default for OutputSpec {
             rdf: None,
             msd: None,
             vacf: None,
+            orientation_acf: None,
             series: false,
             trajectory: None,
             plots: true,
@@ -590,8 +813,36 @@ impl Scene {
             }
             seen[a * ns + b] = Some(k);
             seen[b * ns + a] = Some(k);
-            check_steps(k, &p.steps)?;
+            match (&p.potential, p.steps.is_empty()) {
+                (None, _) => {
+                    if p.terraces.is_some() {
+                        return Err(SceneError::invalid(
+                            format!("pair[{k}].terraces"),
+                            "only used with `potential` (a smooth potential on terraces)",
+                        ));
+                    }
+                    check_steps(k, &p.steps)?;
+                }
+                (Some(pot), true) => {
+                    check_potential(k, pot)?;
+                    let t = p.terraces.as_ref().ok_or_else(|| {
+                        SceneError::invalid(
+                            format!("pair[{k}].terraces"),
+                            "a smooth potential needs its terraces (for example \
+                             `terraces = { step_kt = 0.5 }`)",
+                        )
+                    })?;
+                    check_terraces(k, pot, t)?;
+                }
+                (Some(_), false) => {
+                    return Err(SceneError::invalid(
+                        format!("pair[{k}]"),
+                        "give either `steps` or a `potential` with `terraces`, not both",
+                    ));
+                }
+            }
         }
+        self.check_bodies()?;
         for a in 0..ns {
             for b in a..ns {
                 if seen[a * ns + b].is_none() {
@@ -747,6 +998,329 @@ impl Scene {
     }
 }
 
+impl Scene {
+    /// Whether the bodies are rods on an orientation-dependent terraced potential.
+    pub fn has_rods(&self) -> bool {
+        self.pair
+            .iter()
+            .any(|p| p.potential.is_some_and(|q| q.is_anisotropic()))
+    }
+
+    /// The checks of rods, potentials, orientations and searches across keys.
+    fn check_bodies(&self) -> Result<(), SceneError> {
+        let smooth = self.pair.iter().filter(|p| p.potential.is_some()).count();
+        if smooth > 0 && smooth < self.pair.len() {
+            return Err(SceneError::invalid(
+                "pair",
+                "either every pair table has `steps` or every one has a `potential`: a scene \
+                 cannot mix stepped and terraced potentials",
+            ));
+        }
+        let kinds: Vec<&str> = self
+            .pair
+            .iter()
+            .filter_map(|p| p.potential.map(|q| q.kind()))
+            .collect();
+        if let Some(k) = kinds.iter().position(|&k| k != kinds[0]) {
+            return Err(SceneError::invalid(
+                format!("pair[{k}].potential.kind"),
+                format!(
+                    "`{}` differs from `{}` of pair[0]: every pair of a scene must use the same \
+                     kind of potential",
+                    kinds[k], kinds[0]
+                ),
+            ));
+        }
+        let anisotropic: Vec<bool> = self
+            .pair
+            .iter()
+            .map(|p| p.potential.is_some_and(|q| q.is_anisotropic()))
+            .collect();
+        let rods = anisotropic.iter().any(|&a| a);
+        if rods && let Some(k) = anisotropic.iter().position(|&a| !a) {
+            return Err(SceneError::invalid(
+                format!("pair[{k}].potential"),
+                "a rods potential with zeta = 0 is isotropic: in a scene of rods every pair \
+                 must depend on the orientations (zeta > 0)",
+            ));
+        }
+        for (k, sp) in self.species.iter().enumerate() {
+            match (sp.inertia, rods) {
+                (Some(i), true) => positive(&format!("species[{k}].inertia"), i)?,
+                (None, true) => {
+                    return Err(SceneError::invalid(
+                        format!("species[{k}].inertia"),
+                        "needed: the potential depends on orientations, so the bodies are rods \
+                         with a moment of inertia about their short axes",
+                    ));
+                }
+                (Some(_), false) => {
+                    return Err(SceneError::invalid(
+                        format!("species[{k}].inertia"),
+                        "only rods have one: give a potential that depends on orientations \
+                         (`rods` with zeta > 0 or `gay-berne`), or remove the key",
+                    ));
+                }
+                (None, false) => {}
+            }
+        }
+        // Orientations.
+        let init = &self.init;
+        if !rods && (init.orientations != Orientations::Random || init.axis.is_some()) {
+            return Err(SceneError::invalid(
+                "init.orientations",
+                "only rods have orientations (the bodies of this scene are spheres)",
+            ));
+        }
+        match (init.orientations, init.axis) {
+            (Orientations::Aligned, None) => {
+                return Err(SceneError::invalid(
+                    "init.axis",
+                    "needed by `orientations = \"aligned\"`: the common axis [x, y, z]",
+                ));
+            }
+            (Orientations::Aligned, Some(a)) => {
+                let len = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+                if !(len.is_finite() && len > 0.0) {
+                    return Err(SceneError::invalid(
+                        "init.axis",
+                        format!("must be a nonzero finite vector, got {a:?}"),
+                    ));
+                }
+            }
+            (_, Some(_)) => {
+                return Err(SceneError::invalid(
+                    "init.axis",
+                    "only used with `orientations = \"aligned\"`",
+                ));
+            }
+            (Orientations::File, None) if init.positions != Positions::File => {
+                return Err(SceneError::invalid(
+                    "init.orientations",
+                    "`file` reads the orientation column of `init.file`: it needs \
+                     `positions = \"file\"`",
+                ));
+            }
+            _ => {}
+        }
+        // Searches.
+        if let Some(sr) = &self.search {
+            if !rods {
+                return Err(SceneError::invalid(
+                    "search",
+                    "only used by rods on terraced potentials (event times of spheres are \
+                     analytic)",
+                ));
+            }
+            if let Some(x) = sr.max_step {
+                positive("search.max_step", x)?;
+            }
+            if let Some(x) = sr.window
+                && !(x > 0.0)
+            {
+                return Err(SceneError::invalid(
+                    "search.window",
+                    format!("must be a positive time or inf, got {x}"),
+                ));
+            }
+            if let Some(j) = sr.jitter
+                && !(0.0..0.5).contains(&j)
+            {
+                return Err(SceneError::invalid(
+                    "search.jitter",
+                    format!("must be at least 0 and below 0.5, got {j}"),
+                ));
+            }
+            if let Some(x) = sr.grid_threshold {
+                if sr.method != SearchMethodSpec::Grid {
+                    return Err(SceneError::invalid(
+                        "search.grid_threshold",
+                        "only used with `method = \"grid\"`",
+                    ));
+                }
+                if !(x >= 0.0) {
+                    return Err(SceneError::invalid(
+                        "search.grid_threshold",
+                        format!("must be an energy ≥ 0 or inf, got {x}"),
+                    ));
+                }
+            }
+            if let Some(x) = sr.verify_step {
+                positive("search.verify_step", x)?;
+            }
+            if let Some(x) = sr.max_change {
+                if !(x > 0.0) {
+                    return Err(SceneError::invalid(
+                        "search.max_change",
+                        format!("must be a positive fraction or inf, got {x}"),
+                    ));
+                }
+                if sr.method != SearchMethodSpec::Adaptive {
+                    return Err(SceneError::invalid(
+                        "search.max_change",
+                        "only used with `method = \"adaptive\"`",
+                    ));
+                }
+            }
+        }
+        if let Some(c) = &self.output.orientation_acf {
+            if !rods {
+                return Err(SceneError::invalid(
+                    "output.orientation_acf",
+                    "only rods have orientations (the bodies of this scene are spheres)",
+                ));
+            }
+            positive("output.orientation_acf.max_lag", c.max_lag)?;
+            match self.output.sample_interval {
+                None => {
+                    return Err(SceneError::invalid(
+                        "output.sample_interval",
+                        "needed by `output.orientation_acf`: the simulated time between samples",
+                    ));
+                }
+                Some(dt) if c.max_lag < dt => {
+                    return Err(SceneError::invalid(
+                        "output.orientation_acf.max_lag",
+                        format!(
+                            "{} is shorter than output.sample_interval = {dt}",
+                            c.max_lag
+                        ),
+                    ));
+                }
+                _ => {}
+            }
+        }
+        Ok(())
+    }
+}
+
+fn check_potential(k: usize, p: &PotentialSpec) -> Result<(), SceneError> {
+    let key = |name: &str| format!("pair[{k}].potential.{name}");
+    match *p {
+        PotentialSpec::Rods {
+            epsilon,
+            sigma,
+            zeta,
+        } => {
+            positive(&key("epsilon"), epsilon)?;
+            positive(&key("sigma"), sigma)?;
+            non_negative(&key("zeta"), zeta)?;
+        }
+        PotentialSpec::LennardJones { epsilon, sigma } => {
+            positive(&key("epsilon"), epsilon)?;
+            positive(&key("sigma"), sigma)?;
+        }
+        PotentialSpec::GayBerne {
+            sigma0,
+            epsilon0,
+            kappa,
+            kappa_prime,
+            mu,
+            nu,
+        } => {
+            positive(&key("sigma0"), sigma0)?;
+            positive(&key("epsilon0"), epsilon0)?;
+            positive(&key("kappa"), kappa)?;
+            positive(&key("kappa_prime"), kappa_prime)?;
+            positive(&key("mu"), mu)?;
+            non_negative(&key("nu"), nu)?;
+        }
+    }
+    Ok(())
+}
+
+fn check_terraces(k: usize, p: &PotentialSpec, t: &TerraceSpec) -> Result<(), SceneError> {
+    let key = |name: &str| format!("pair[{k}].terraces.{name}");
+    let given = [t.step.is_some(), t.step_kt.is_some(), t.levels.is_some()];
+    if given.iter().filter(|&&g| g).count() != 1 {
+        return Err(SceneError::invalid(
+            format!("pair[{k}].terraces"),
+            "give exactly one of `step` (ΔV), `step_kt` (ΔV/kT) or `levels`",
+        ));
+    }
+    if let Some(x) = t.step {
+        positive(&key("step"), x)?;
+    }
+    if let Some(x) = t.step_kt {
+        positive(&key("step_kt"), x)?;
+    }
+    if let Some(levels) = &t.levels {
+        if levels.is_empty() {
+            return Err(SceneError::invalid(
+                key("levels"),
+                "at least one level is needed",
+            ));
+        }
+        if let Some(x) = levels.iter().find(|x| !x.is_finite()) {
+            return Err(SceneError::invalid(
+                key("levels"),
+                format!("levels must be finite energies, got {x}"),
+            ));
+        }
+        if t.placement != PlacementSpec::EqualEnergy {
+            return Err(SceneError::invalid(
+                key("placement"),
+                "places the paper's levels between their ends: not used with explicit `levels`",
+            ));
+        }
+        match (&t.energies, t.step_energy) {
+            (Some(_), StepEnergySpec::Equal) => {}
+            (Some(_), _) => {
+                return Err(SceneError::invalid(
+                    key("step_energy"),
+                    "give either `energies` or a `step_energy` rule, not both",
+                ));
+            }
+            (None, StepEnergySpec::Equal) => {
+                return Err(SceneError::invalid(
+                    key("energies"),
+                    "explicit `levels` need the terrace energies: give `energies` (one more \
+                     than levels) or a `step_energy` rule (midpoint, volume-average, virial)",
+                ));
+            }
+            (None, _) => {}
+        }
+    } else if t.energies.is_some() {
+        return Err(SceneError::invalid(
+            key("energies"),
+            "only used with explicit `levels`",
+        ));
+    }
+    if let Some(c) = t.core {
+        positive(&key("core"), c)?;
+    }
+    if let Some(o) = t.outermost {
+        if !(o.is_finite() && o < 0.0) {
+            return Err(SceneError::invalid(
+                key("outermost"),
+                format!("must be a negative energy (the outermost level below zero), got {o}"),
+            ));
+        }
+        if t.placement == PlacementSpec::EqualEnergy && t.step_energy == StepEnergySpec::Equal {
+            return Err(SceneError::invalid(
+                key("outermost"),
+                "moves the outermost level of a placement rule: give `placement` or \
+                 `step_energy` too",
+            ));
+        }
+    }
+    let needs_profile =
+        t.placement != PlacementSpec::EqualEnergy || t.step_energy != StepEnergySpec::Equal;
+    if needs_profile && matches!(p, PotentialSpec::GayBerne { .. }) {
+        let which = if t.placement != PlacementSpec::EqualEnergy {
+            "placement"
+        } else {
+            "step_energy"
+        };
+        return Err(SceneError::invalid(
+            key(which),
+            "needs a radial profile of the potential: available for `rods` and \
+             `lennard-jones`, not `gay-berne`",
+        ));
+    }
+    Ok(())
+}
+
 fn positive(key: &str, x: f64) -> Result<(), SceneError> {
     if x.is_finite() && x > 0.0 {
         Ok(())
@@ -821,13 +1395,36 @@ fn remove_key(doc: &mut toml::Table, parts: &[&str]) -> Result<(), String> {
     let (last, path) = parts.split_last().expect("a key has at least one part");
     let mut table = doc;
     let mut walked = String::new();
-    for part in path {
+    let mut iter = path.iter().peekable();
+    while let Some(part) = iter.next() {
         if !walked.is_empty() {
             walked.push('.');
         }
         walked.push_str(part);
         table = match table.get_mut(*part) {
             Some(toml::Value::Table(t)) => t,
+            // An array of tables: the next part picks the element (`pair.0.terraces.step=`).
+            Some(toml::Value::Array(a)) => {
+                let Some(index) = iter.next() else {
+                    return Err(format!("`{walked}` is an array, not a table"));
+                };
+                let len = a.len();
+                let k: usize = index
+                    .parse()
+                    .map_err(|_| format!("`{walked}` is an array: `{index}` is not an index"))?;
+                walked.push('.');
+                walked.push_str(index);
+                match a.get_mut(k) {
+                    Some(toml::Value::Table(t)) => t,
+                    Some(_) => return Err(format!("`{walked}` is not a table of the scene")),
+                    None => {
+                        return Err(format!(
+                            "`{}` has {len} elements, no index {k}",
+                            &walked[..walked.len() - index.len() - 1]
+                        ));
+                    }
+                }
+            }
             _ => return Err(format!("`{walked}` is not a table of the scene")),
         };
     }
@@ -915,6 +1512,14 @@ events = 1000
         );
         let s =
             Scene::from_str_with(MINIMAL, &["run.events=".into(), "run.time=2".into()]).unwrap();
+        // Removing a key inside an element of an array of tables.
+        let e = Scene::from_str_with(MINIMAL, &["pair.0.steps=".into()]).unwrap_err();
+        assert!(e.to_string().contains("pair[0].steps"), "{e}");
+        let e = Scene::from_str_with(MINIMAL, &["pair.2.steps=".into()]).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "override `pair.2.steps=`: `pair` has 1 elements, no index 2"
+        );
         assert_eq!((s.run.events, s.run.time), (None, Some(2.0)));
         let e = Scene::from_str_with(MINIMAL, &["run.events.x=1".into()]).unwrap_err();
         assert_eq!(

@@ -35,7 +35,7 @@ use rand_xoshiro::Xoshiro256PlusPlus;
 use crate::body::Body;
 use crate::cell::CellGrid;
 use crate::event::{Boundary, Event, EventLists, Kind, SystemEvent};
-use crate::model::{Executed, OVERLAP_TOLERANCE, PairClass, PairModel};
+use crate::model::{Executed, PairClass, PairModel, PairSetupError};
 use crate::neighbour::{self, NeighbourLists};
 use crate::schedule::Scheduler;
 use crate::sum::Compensated;
@@ -100,6 +100,20 @@ pub enum SetupError {
         /// 3 × (reach + 2 skin).
         need: f64,
     },
+    /// Two bodies start inside the hard core of their terraced potential.
+    #[error(
+        "bodies {i} and {j} overlap: their pair energy {energy:.6} is at or above the hard-core level {core} of the terraces"
+    )]
+    InsideCore {
+        /// First body.
+        i: u32,
+        /// Second body.
+        j: u32,
+        /// Their pair energy `U`.
+        energy: f64,
+        /// The hard-core level.
+        core: f64,
+    },
     /// A position, velocity or box length is not finite.
     #[error("the initial state is not finite (body {0})")]
     NotFinite(u32),
@@ -131,6 +145,9 @@ pub struct Counters {
     pub shell: u64,
     /// Andersen thermostat collisions.
     pub thermostat: u64,
+    /// Virtual events (000 §III.B): a root search resumed (or started) where its window or the
+    /// bracket put it; no impulse.
+    pub virtual_: u64,
     /// Samples of the observables and trajectory frames (not counted in `events`).
     pub samples: u64,
     /// Re-basings of the time origin (not counted in `events`).
@@ -188,6 +205,10 @@ pub struct View<'a> {
     pub kinetic_integral: f64,
     /// Degrees of freedom of the kinetic temperature.
     pub dof: f64,
+    /// The unit long axis of every body now (empty for bodies without orientation).
+    pub axes: Vec<DVec3>,
+    /// Rotational kinetic energy now (0 for spheres).
+    pub rotational_kinetic: f64,
 }
 
 impl View<'_> {
@@ -264,6 +285,7 @@ struct Phase {
     start: f64,
     virial: Compensated,
     kinetic_integral: Compensated,
+    translational_integral: Compensated,
     potential_integral: Compensated,
     last_change: f64,
 }
@@ -315,6 +337,7 @@ pub struct Simulation<M, S> {
     counters: Counters,
     anomalies: Anomalies,
     kinetic: f64,
+    translational: f64,
     potential: f64,
     phase: Phase,
     thermostat: Option<Andersen>,
@@ -388,10 +411,8 @@ where
                 generation: 0,
             });
         }
-        let n_species = model.potentials().n_species();
-        let masses: Vec<f64> = (0..n_species as u32)
-            .map(|s| model.particle(s).mass())
-            .collect();
+        let n_species = model.n_species();
+        let masses: Vec<f64> = (0..n_species as u32).map(|s| model.mass(s)).collect();
         let shifts: [DVec3; 27] = std::array::from_fn(|c| {
             let o = neighbour::offsets(c as u32);
             DVec3::new(f64::from(o[0]), f64::from(o[1]), f64::from(o[2])) * lengths
@@ -416,22 +437,20 @@ where
                     let code = image_code(shift, lengths);
                     lists[i as usize].push(neighbour::entry(j, code));
                     lists[j as usize].push(neighbour::entry(i, neighbour::opposite(code)));
-                    let d = d2.sqrt();
-                    let pot = model.potentials().get(bi.species, bj.species);
-                    if let Some(core) = pot.core()
-                        && d < core
-                    {
-                        found = Err(SetupError::Overlap {
-                            i,
-                            j,
-                            distance: d,
-                            core,
-                        });
-                        return;
-                    }
-                    let level = pot.level_at(d);
-                    if level > 0 {
-                        model.set_level(i, j, level as u16);
+                    let dr = bi.r - (bj.r + shift);
+                    match model.setup_pair(i, j, bi.species, bj.species, dr) {
+                        Ok(()) => {}
+                        Err(PairSetupError::Overlap { distance, core }) => {
+                            found = Err(SetupError::Overlap {
+                                i,
+                                j,
+                                distance,
+                                core,
+                            });
+                        }
+                        Err(PairSetupError::InsideCore { energy, core }) => {
+                            found = Err(SetupError::InsideCore { i, j, energy, core });
+                        }
                     }
                 }
             });
@@ -470,6 +489,7 @@ where
             counters: Counters::default(),
             anomalies: Anomalies::default(),
             kinetic: 0.0,
+            translational: 0.0,
             potential: 0.0,
             phase: Phase {
                 start: settings.start_time,
@@ -490,6 +510,7 @@ where
             nan: None,
         };
         sim.kinetic = sim.kinetic_energy();
+        sim.translational = sim.translational_kinetic();
         sim.potential = sim.potential_energy();
         sim.predict_all();
         Ok(sim)
@@ -595,6 +616,7 @@ where
         self.lists.remove(p, k);
         match (e.kind(), e.partner()) {
             (Kind::Pair(boundary), Some(j)) => self.pair_event(p, j, boundary)?,
+            (Kind::Virtual, Some(j)) => self.virtual_event(p, j),
             _ => self.shell_event(p),
         }
         if let Some(i) = self.nan {
@@ -635,7 +657,9 @@ where
         let (mut vi, mut vj) = (bi.v, bj.v);
         let ex: Executed = self
             .model
-            .execute(i, j, bi.species, bj.species, boundary, dr, &mut vi, &mut vj)
+            .execute(
+                i, j, bi.species, bj.species, now, boundary, dr, &mut vi, &mut vj,
+            )
             .map_err(|source| SimError::Collide {
                 i,
                 j,
@@ -654,19 +678,48 @@ where
             PairClass::StepReflect => self.counters.step_reflect += 1,
             PairClass::Skipped => self.anomalies.receding += 1,
         }
-        if ex.delta_u != 0.0 {
-            self.energy_changes(-ex.delta_u, ex.delta_u);
+        if self.model.rotational_dof() > 0.0 {
+            // Impulses share kinetic energy between translation and rotation: track the
+            // translational part for the two temperatures.
+            let (mi, mj) = (
+                self.masses[bi.species as usize],
+                self.masses[bj.species as usize],
+            );
+            let dkt = 0.5 * mi * (vi.length_squared() - bi.v.length_squared())
+                + 0.5 * mj * (vj.length_squared() - bj.v.length_squared());
+            self.energy_changes(-ex.delta_u, ex.delta_u, dkt);
+        } else if ex.delta_u != 0.0 {
+            self.energy_changes(-ex.delta_u, ex.delta_u, -ex.delta_u);
         }
         self.phase.virial.add(ex.virial);
         self.bodies[iu].generation = self.bodies[iu].generation.wrapping_add(1);
         self.bodies[ju].generation = self.bodies[ju].generation.wrapping_add(1);
         self.lists.clear(i);
         self.lists.clear(j);
+        self.model.forget(i);
+        self.model.forget(j);
         let ti = self.predict(i, Skip::Nobody);
         self.set(i, ti);
         let tj = self.predict(j, Skip::One(i));
         self.set(j, tj);
         Ok(())
+    }
+
+    /// A virtual event of owner `i` with partner `j` (both unchanged since it was scheduled):
+    /// the model continues the pair's root search from where it stopped, and whatever it finds
+    /// (a pair event, or the next virtual event) joins `i`'s list.
+    fn virtual_event(&mut self, i: u32, j: u32) {
+        let now = self.now;
+        let (bi, bj) = (&self.bodies[i as usize], &self.bodies[j as usize]);
+        let dr = self.min_image(bi.position_at(now) - bj.position_at(now));
+        let dv = bi.v - bj.v;
+        let (si, sj, gj) = (bi.species, bj.species, bj.generation);
+        if let Some((dt, kind)) = self.model.resume(i, j, si, sj, now, dr, dv) {
+            self.lists
+                .push(i, Event::with_partner(now + dt, j, gj, kind));
+        }
+        self.counters.virtual_ += 1;
+        self.reschedule(i);
     }
 
     /// Body `i` has moved the skin away from its list centre: wrap it into the box, move its
@@ -758,9 +811,10 @@ where
         let (bi, bj) = (&self.bodies[i as usize], &self.bodies[j as usize]);
         let dr = bi.position_at(now) - (bj.position_at(now) + self.shifts[code as usize]);
         let dv = bi.v - bj.v;
-        if let Some((dt, boundary)) = self.model.predict(i, j, bi.species, bj.species, dr, dv) {
+        let (si, sj, gj) = (bi.species, bj.species, bj.generation);
+        if let Some((dt, kind)) = self.model.predict(i, j, si, sj, now, dr, dv) {
             self.lists
-                .push(i, Event::pair(now + dt, j, bj.generation, boundary));
+                .push(i, Event::with_partner(now + dt, j, gj, kind));
         }
     }
 
@@ -841,29 +895,40 @@ where
             StandardNormal.sample(&mut self.rng),
             StandardNormal.sample(&mut self.rng),
         ) * scale;
-        let dk = 0.5 * m * (v.length_squared() - self.bodies[iu].v.length_squared());
+        let dkt = 0.5 * m * (v.length_squared() - self.bodies[iu].v.length_squared());
         self.bodies[iu].v = v;
-        self.energy_changes(dk, 0.0);
+        let species = self.bodies[iu].species;
+        let dk = dkt
+            + self
+                .model
+                .thermalize(i, species, self.now, th.temperature, &mut self.rng);
+        self.energy_changes(dk, 0.0, dkt);
         self.bodies[iu].generation = self.bodies[iu].generation.wrapping_add(1);
         self.lists.clear(i);
+        self.model.forget(i);
         let t = self.predict(i, Skip::Nobody);
         self.set(i, t);
         let u: f64 = self.rng.random();
         self.next_thermostat = self.now - (1.0 - u).ln() / (th.rate * f64::from(n));
     }
 
-    /// Records a change of kinetic and potential energy now (for the time integrals).
+    /// Records a change of kinetic energy `dk` (of which `dkt` translational) and potential
+    /// energy `du` now (for the time integrals).
     #[inline]
-    fn energy_changes(&mut self, dk: f64, du: f64) {
+    fn energy_changes(&mut self, dk: f64, du: f64, dkt: f64) {
         self.flush_integrals();
         self.kinetic += dk;
         self.potential += du;
+        self.translational += dkt;
     }
 
     fn flush_integrals(&mut self) {
         let dt = self.now - self.phase.last_change;
         if dt != 0.0 {
             self.phase.kinetic_integral.add(self.kinetic * dt);
+            self.phase
+                .translational_integral
+                .add(self.translational * dt);
             self.phase.potential_integral.add(self.potential * dt);
             self.phase.last_change = self.now;
         }
@@ -899,7 +964,7 @@ where
         let (nbrs, bodies, model, lists, shifts) = (
             &self.nbrs,
             &self.bodies,
-            &self.model,
+            &mut self.model,
             &mut self.lists,
             &self.shifts,
         );
@@ -912,10 +977,10 @@ where
             let bj = &bodies[j as usize];
             let dr = (ri - shifts[neighbour::code(e) as usize]) - bj.position_at(now);
             let dv = bi.v - bj.v;
-            if let Some((dt, boundary)) = model.predict(i, j, bi.species, bj.species, dr, dv) {
+            if let Some((dt, kind)) = model.predict(i, j, bi.species, bj.species, now, dr, dv) {
                 let time = now + dt;
                 earliest = earliest.min(time);
-                lists.push(i, Event::pair(time, j, bj.generation, boundary));
+                lists.push(i, Event::with_partner(time, j, bj.generation, kind));
             }
         }
         earliest.min(self.predict_shell(i))
@@ -955,6 +1020,7 @@ where
             let b = &mut self.bodies[i as usize];
             b.generation = b.generation.wrapping_add(1);
             self.lists.clear(i);
+            self.model.forget(i);
         }
         for i in 0..self.bodies.len() as u32 {
             self.predict(i, Skip::Lower);
@@ -987,6 +1053,7 @@ where
             b.sync(t0);
             b.t = 0.0;
         }
+        self.model.rebase(t0);
         self.epoch.add(t0);
         self.now = 0.0;
         self.phase.start -= t0;
@@ -1038,6 +1105,7 @@ where
             self.predict_all();
         }
         self.kinetic = self.kinetic_energy();
+        self.translational = self.translational_kinetic();
         self.potential = self.potential_energy();
         self.counters = Counters::default();
         self.anomalies = Anomalies::default();
@@ -1068,27 +1136,55 @@ where
             virial: self.phase.virial.value(),
             kinetic_integral: self.phase.kinetic_integral.value(),
             dof: self.dof(),
+            axes: (0..self.bodies.len() as u32)
+                .map_while(|i| self.model.axis(i, self.now))
+                .collect(),
+            rotational_kinetic: self.model.rotational_kinetic(),
         }
     }
 
     /// Degrees of freedom of the kinetic temperature: 3N − 3 when momentum is conserved, 3N
-    /// with a thermostat acting.
+    /// with a thermostat acting, plus the rotational ones (2 per rod).
     pub fn dof(&self) -> f64 {
         let n = self.bodies.len() as f64;
+        let rotation = self.model.rotational_dof();
         if self.thermostat.is_some() {
-            3.0 * n
+            3.0 * n + rotation
         } else {
-            3.0 * n - 3.0
+            3.0 * n - 3.0 + rotation
         }
     }
 
-    /// Kinetic energy, recomputed from the velocities.
+    /// Kinetic energy (translational and rotational), recomputed from the velocities.
     pub fn kinetic_energy(&self) -> f64 {
+        self.translational_kinetic() + self.model.rotational_kinetic()
+    }
+
+    /// Translational kinetic energy, recomputed from the velocities.
+    pub fn translational_kinetic(&self) -> f64 {
         let mut k = Compensated::ZERO;
         for b in &self.bodies {
             k.add(0.5 * self.masses[b.species as usize] * b.v.length_squared());
         }
         k.value()
+    }
+
+    /// Total angular momentum about the origin, `Σ m r × v + I ω`, with unwrapped positions
+    /// (meaningful for a cluster that never interacts with its periodic images: periodic
+    /// boundaries conserve linear momentum, not angular momentum).
+    pub fn angular_momentum(&self) -> DVec3 {
+        let mut l = [Compensated::ZERO; 3];
+        for (i, b) in self.bodies.iter().enumerate() {
+            let im = self.images[i];
+            let r = b.position_at(self.now)
+                + DVec3::new(f64::from(im[0]), f64::from(im[1]), f64::from(im[2])) * self.lengths;
+            let li = self.masses[b.species as usize] * r.cross(b.v)
+                + self.model.spin(i as u32, b.species);
+            for (a, la) in l.iter_mut().enumerate() {
+                la.add(li[a]);
+            }
+        }
+        DVec3::new(l[0].value(), l[1].value(), l[2].value())
     }
 
     /// Potential energy, recomputed from the stored pair levels.
@@ -1100,11 +1196,10 @@ where
                 .for_each_neighbour_cell(self.cell_of[i as usize], |cell, _| {
                     for &j in self.cells.bodies(cell) {
                         if j > i {
-                            let level = self.model.level(i, j);
-                            if level > 0 {
-                                let bj = &self.bodies[j as usize];
-                                let pot = self.model.potentials().get(bi.species, bj.species);
-                                u.add(pot.levels()[level as usize].energy);
+                            let bj = &self.bodies[j as usize];
+                            let e = self.model.pair_energy(i, j, bi.species, bj.species);
+                            if e != 0.0 {
+                                u.add(e);
                             }
                         }
                     }
@@ -1172,6 +1267,11 @@ where
     /// `∫ K dt` of the phase.
     pub fn kinetic_integral(&self) -> f64 {
         self.phase.kinetic_integral.value()
+    }
+
+    /// `∫ K_rot dt` of the phase (rotational kinetic energy; 0 for spheres).
+    pub fn rotational_kinetic_integral(&self) -> f64 {
+        self.phase.kinetic_integral.value() - self.phase.translational_integral.value()
     }
 
     /// `∫ U dt` of the phase.
@@ -1309,34 +1409,13 @@ where
                             continue;
                         }
                         let bj = &self.bodies[j as usize];
-                        let d = (ri - (bj.position_at(self.now) + shift)).length();
-                        let pot = self.model.potentials().get(bi.species, bj.species);
-                        if d < pot.reach() && !listed {
-                            err = Err(format!(
-                                "pair ({i}, {j}) interacts at {d} but is not listed"
-                            ));
-                            return;
-                        }
-                        if let Some(core) = pot.core()
-                            && d * d < core * core * (1.0 - OVERLAP_TOLERANCE)
+                        let dr = ri - (bj.position_at(self.now) + shift);
+                        if let Err(e) = self
+                            .model
+                            .check_pair(i, j, bi.species, bj.species, self.now, dr, listed)
                         {
-                            err = Err(format!("bodies {i} and {j} overlap: distance {d} < {core}"));
+                            err = Err(e);
                             return;
-                        }
-                        let stored = self.model.level(i, j) as usize;
-                        let expected = pot.level_at(d);
-                        if stored != expected && !pot.is_hard_sphere() {
-                            // Allowed only at a boundary, within round-off.
-                            let n = pot.radii().len();
-                            let k = n - stored.max(expected);
-                            let at = pot.radii()[k];
-                            if (d - at).abs() > 1e-9 * at {
-                                err = Err(format!(
-                                    "pair ({i}, {j}) at distance {d} is stored on level {stored}, \
-                                 its distance says level {expected}"
-                                ));
-                                return;
-                            }
                         }
                     }
                 });

@@ -1,0 +1,1168 @@
+//! Rigid rods on terraced potentials (seed 003): any smooth pair potential
+//! `U_ij(r_ij, s_i, s_j)` mapped onto energy terraces (003 Eq. 7) and simulated exactly between
+//! events.
+//!
+//! [`Terraced`] is the [`PairModel`] of such a scene. It keeps, indexed like the loop's bodies:
+//!
+//! - the free rotation of every rod, a [`LinearRotor`] set up at the rod's last change with the
+//!   time of that change (the rod's rotational clock); a rod carries no spin about its axis
+//!   (the torques of a uniaxial potential are perpendicular to it, 003 §V);
+//! - the terrace of every pair off the zero terrace ([`PairStates`], the terrace index stored
+//!   and changed only by executed events, never recomputed from `U` at a level);
+//! - the saved root searches of its virtual events (000 §III.B, 003 §V.A), keyed by the owner
+//!   of the event and its partner.
+//!
+//! **Event times.** A pair on terrace `k` (`U_k ≤ U < U_{k+1}`) has its next event when `U(t)`
+//! leaves that band, at either level. One root search finds the earlier of the two: the
+//! indicator is
+//!
+//! ```text
+//! g(t) = (U(t) − U_k)(U_{k+1} − U(t)) / (U_{k+1} − U_k)          (U_{k+1} − U(t) on terrace 0)
+//! ```
+//!
+//! positive inside the band, zero at either level (where it behaves like `±(U − U_level)`, the
+//! indicator of 003 Eq. 8), negative outside; its derivative follows from `U̇` (003 Eq. 12) at the
+//! cost of a multiplication, so both levels are watched for the price of one search. The search
+//! asks for a falling crossing of `g` and is bracketed by the times the centres spend within the
+//! band's reach (`root_search::sphere_window`; the reach of the outermost levels is 003 Eq. 25
+//! for the rods). A pair not yet within reach gets a virtual event at the moment it enters
+//! (nothing is evaluated before), and a search that reaches the end of its window gets one at
+//! its last sample, from which it resumes if neither body has changed by then.
+//!
+//! **Impulses.** At the event the force and torques of the smooth potential give the direction
+//! of the impulse and `collide::terrace` (003 Eq. 21) its size; the pair crosses to the next
+//! terrace or is reflected (always at the hard core above the top terrace).
+//!
+//! **Checks.** Every executed event verifies that `U` is at the level it was predicted for
+//! (beyond round-off: a *misfit*), every search that starts checks that the pair's `U` lies on
+//! its stored terrace (a pair found *off terrace* is the trace of a missed event), and with
+//! [`SearchSettings::verify_step`] every search interval is searched again on a fine uniform
+//! grid that examines every extremum, counting the roots the search stepped over.
+
+use collide::{LinearBody, Outcome, PairForce, Velocity, terrace};
+use glam::DVec3;
+use potential::{PairGeometry, PairPotential, PotentialError, TerraceMap};
+use rand::{RngExt, SeedableRng};
+use rand_distr::{Distribution, StandardNormal};
+use rand_xoshiro::Xoshiro256PlusPlus;
+use rigid_free::LinearRotor;
+use root_search::{Adaptive, Crossing, Grid, Method, SearchError, SearchState};
+
+use crate::event::{Boundary, Kind};
+use crate::model::{Executed, PairClass, PairModel, PairSetupError};
+use crate::pair_state::PairStates;
+
+/// How the event times of a pair are searched.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SearchMethod {
+    /// The adaptive search with cubic Hermite interpolation of 003 §III (maximum step
+    /// [`SearchSettings::max_step`]).
+    Adaptive,
+    /// The uniform grid of 000 §III.A with spacing [`SearchSettings::max_step`]; extrema are
+    /// examined where `|g|` at a grid point is below `threshold` (energy units).
+    Grid {
+        /// The grazing threshold.
+        threshold: f64,
+    },
+}
+
+/// The accuracy and cost knobs of the root searches.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SearchSettings {
+    /// Adaptive or grid search.
+    pub method: SearchMethod,
+    /// The maximum step of the adaptive search, or the grid spacing (003 §V.A: 4 fs).
+    pub max_step: f64,
+    /// How far one search call may go before it stops and schedules a virtual event (003 §V.A:
+    /// 4 fs); `+∞` searches each bracket to its end in one call (no virtual events).
+    pub window: f64,
+    /// Each search call shortens its step by a random fraction in `[0, jitter)`, so that
+    /// virtual events of different pairs do not coincide (003 §V.A).
+    pub jitter: f64,
+    /// Validation mode: every search interval is searched again on a uniform grid of this
+    /// spacing that examines every extremum (`None`: off).
+    pub verify_step: Option<f64>,
+    /// Adaptive only: each step is also limited so that the linear prediction of `g` changes by
+    /// at most this fraction of the terrace's width (`Adaptive::with_max_change`): steps follow
+    /// the speed of `U`, so an excursion across a level and back within one maximum step is
+    /// still sampled. `+∞`: off.
+    pub max_change: f64,
+}
+
+impl SearchSettings {
+    /// The paper's settings (003 §V.A) with maximum step `max_step` (4 fs there): the adaptive
+    /// search, a window equal to the step, 1 % jitter, no verification.
+    pub fn paper(max_step: f64) -> Self {
+        SearchSettings {
+            method: SearchMethod::Adaptive,
+            max_step,
+            window: max_step,
+            jitter: 0.01,
+            verify_step: None,
+            max_change: f64::INFINITY,
+        }
+    }
+}
+
+/// Counters of the root searches of a run.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct SearchStats {
+    /// Search calls (started or resumed).
+    pub searches: u64,
+    /// Evaluations of `U`, force and torques inside searches.
+    pub evaluations: u64,
+    /// Searches that ended at a root.
+    pub roots: u64,
+    /// Searches that stopped at the end of their window (a virtual event scheduled).
+    pub suspended: u64,
+    /// Virtual events scheduled for the moment a pair comes within reach (no evaluation).
+    pub deferred: u64,
+    /// Searches that started with the pair's `U` off its stored terrace by more than round-off:
+    /// the trace of an event missed earlier.
+    pub off_terrace: u64,
+    /// Executed events whose `U` was not at the predicted level beyond round-off.
+    pub misfits: u64,
+    /// Searches that failed (a non-finite indicator: a broken invariant); the pair got no event.
+    pub failures: u64,
+    /// Searches checked against the fine grid (validation mode).
+    pub verified: u64,
+    /// Searches in whose interval the fine grid found an earlier root (missed events).
+    pub verify_misses: u64,
+}
+
+impl SearchStats {
+    /// The counts since `earlier` (a snapshot of the same run).
+    pub fn since(&self, earlier: &SearchStats) -> SearchStats {
+        SearchStats {
+            searches: self.searches - earlier.searches,
+            evaluations: self.evaluations - earlier.evaluations,
+            roots: self.roots - earlier.roots,
+            suspended: self.suspended - earlier.suspended,
+            deferred: self.deferred - earlier.deferred,
+            off_terrace: self.off_terrace - earlier.off_terrace,
+            misfits: self.misfits - earlier.misfits,
+            failures: self.failures - earlier.failures,
+            verified: self.verified - earlier.verified,
+            verify_misses: self.verify_misses - earlier.verify_misses,
+        }
+    }
+}
+
+/// One rod's free rotation since its last change at time `t`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Rod {
+    rotor: LinearRotor,
+    t: f64,
+}
+
+impl Rod {
+    #[inline(always)]
+    fn axis(&self, now: f64) -> DVec3 {
+        self.rotor.axis(now - self.t)
+    }
+}
+
+/// The band of one terrace: the two levels around it and what crossing them costs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Band {
+    /// The level below (`−∞` for terrace 0).
+    lo: f64,
+    /// The level above (the hard core for the top terrace).
+    hi: f64,
+    /// `1 / (hi − lo)`, 0 for terrace 0.
+    inv_width: f64,
+    /// The range of `U` on the terrace (`hi − U_min` for terrace 0).
+    width: f64,
+    /// The largest centre distance at which `U` can reach either level.
+    reach: f64,
+    /// `ΔV` of crossing up (`+∞` into the core).
+    up: f64,
+    /// `ΔV` of crossing down (NaN for terrace 0).
+    down: f64,
+}
+
+impl Band {
+    /// The indicator `g` and `ġ` from `U` and `U̇` (module documentation).
+    #[inline(always)]
+    fn indicator(&self, u: f64, du: f64) -> (f64, f64) {
+        if self.inv_width == 0.0 {
+            (self.hi - u, -du)
+        } else {
+            (
+                (u - self.lo) * (self.hi - u) * self.inv_width,
+                du * (self.hi + self.lo - 2.0 * u) * self.inv_width,
+            )
+        }
+    }
+
+    fn width(&self) -> f64 {
+        self.width
+    }
+}
+
+/// The terraced potential of one pair of species, ready for the event loop.
+#[derive(Clone, Debug)]
+pub struct PairTerraces<P> {
+    potential: P,
+    map: TerraceMap,
+    bands: Vec<Band>,
+    zero: u16,
+    terraces: u16,
+    reach: f64,
+    reach2: f64,
+    /// `U` is clamped here inside searches (deep inside the core it may overflow).
+    clamp: f64,
+}
+
+/// Most terraces of one pair (stored per pair in 16 bits).
+pub const MAX_TERRACES: usize = u16::MAX as usize;
+
+/// Why a terraced model could not be built.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ModelError {
+    /// The reach of a level could not be found.
+    #[error("the reach of the terraces cannot be found: {0}")]
+    Reach(PotentialError),
+    /// More terraces than a pair can store.
+    #[error(
+        "{0} terraces: at most {MAX_TERRACES} are possible (raise the step ΔV or lower the core)"
+    )]
+    TooManyTerraces(usize),
+    /// A search setting is out of range.
+    #[error("bad search setting: {0}")]
+    Search(SearchError),
+    /// A rod's axis or angular velocity is not usable.
+    #[error("body {body}: {problem}")]
+    Rotor {
+        /// The body.
+        body: usize,
+        /// What is wrong.
+        problem: String,
+    },
+    /// A species pair has no table, or a table names a missing species.
+    #[error("species pair ({0}, {1}) has no terraced potential")]
+    MissingPair(usize, usize),
+    /// A mass or moment of inertia is not positive and finite.
+    #[error("species {species}: {what} {value} must be positive and finite")]
+    Species {
+        /// The species.
+        species: usize,
+        /// `mass` or `inertia`.
+        what: &'static str,
+        /// The value.
+        value: f64,
+    },
+}
+
+impl<P: PairPotential> PairTerraces<P> {
+    /// The terraces of `map` on `potential`, with the reach of every band.
+    ///
+    /// # Errors
+    /// [`ModelError::Reach`], [`ModelError::TooManyTerraces`].
+    pub fn new(potential: P, map: TerraceMap) -> Result<Self, ModelError> {
+        let n = map.terraces();
+        if n > MAX_TERRACES {
+            return Err(ModelError::TooManyTerraces(n));
+        }
+        let levels = map.levels().to_vec();
+        let core = map.core();
+        // Reach of every level, and of the core; a tiny pad covers round-off of the bracket.
+        let mut level_reach = Vec::with_capacity(levels.len() + 1);
+        for &u in levels.iter().chain(std::iter::once(&core)) {
+            level_reach.push(potential.reach(u).map_err(ModelError::Reach)? * (1.0 + 1e-12));
+        }
+        let energies = map.energies();
+        let bands: Vec<Band> = (0..n)
+            .map(|k| {
+                let (lo, reach_lo) = if k == 0 {
+                    (f64::NEG_INFINITY, 0.0)
+                } else {
+                    (levels[k - 1], level_reach[k - 1])
+                };
+                let hi = if k < levels.len() { levels[k] } else { core };
+                Band {
+                    lo,
+                    hi,
+                    inv_width: if k == 0 { 0.0 } else { 1.0 / (hi - lo) },
+                    width: if k == 0 {
+                        hi - potential.minimum()
+                    } else {
+                        hi - lo
+                    },
+                    reach: reach_lo.max(level_reach[k]),
+                    up: energies
+                        .get(k + 1)
+                        .map_or(f64::INFINITY, |v| v - energies[k]),
+                    down: if k == 0 {
+                        f64::NAN
+                    } else {
+                        energies[k - 1] - energies[k]
+                    },
+                }
+            })
+            .collect();
+        let reach = map.reach(&potential).map_err(ModelError::Reach)? * (1.0 + 1e-12);
+        Ok(PairTerraces {
+            clamp: 1e3 * core.abs().max(1.0),
+            potential,
+            zero: map.zero_terrace() as u16,
+            terraces: n as u16,
+            map,
+            bands,
+            reach,
+            reach2: reach * reach,
+        })
+    }
+
+    /// The smooth potential.
+    pub fn potential(&self) -> &P {
+        &self.potential
+    }
+
+    /// The terrace map.
+    pub fn map(&self) -> &TerraceMap {
+        &self.map
+    }
+
+    /// The interaction reach (the reach of the outermost levels, 003 Eq. 25 for the rods).
+    pub fn reach(&self) -> f64 {
+        self.reach
+    }
+
+    /// Stored value of terrace `k` (0 for the zero terrace, which is not stored).
+    #[inline(always)]
+    fn stored(&self, k: u16) -> u16 {
+        ((u32::from(k) + u32::from(self.terraces) - u32::from(self.zero))
+            % u32::from(self.terraces)) as u16
+    }
+
+    /// Terrace of stored value `v`.
+    #[inline(always)]
+    fn terrace(&self, v: u16) -> u16 {
+        ((u32::from(v) + u32::from(self.zero)) % u32::from(self.terraces)) as u16
+    }
+}
+
+/// What a virtual event resumes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Pending {
+    /// Start the search (the pair has just come within reach) at `at`, bracket end `end`.
+    Start { at: f64, end: f64 },
+    /// Continue a suspended search; the speed `U̇` at its last sample.
+    Resume(SearchState, f64),
+}
+
+/// Mass and moment of inertia (about any axis through the centre perpendicular to the rod's
+/// own) of one species of rods.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RodSpecies {
+    /// Mass.
+    pub mass: f64,
+    /// Moment of inertia `I₁ = I₂`.
+    pub inertia: f64,
+}
+
+/// A species-pair table: the two species and their terraced potential.
+pub type PairTable<P> = ((usize, usize), PairTerraces<P>);
+
+/// Rigid rods on terraced pair potentials (module documentation).
+#[derive(Clone, Debug)]
+pub struct Terraced<P> {
+    n_species: usize,
+    table: Vec<u32>,
+    pairs: Vec<PairTerraces<P>>,
+    species: Vec<RodSpecies>,
+    body_species: Vec<u32>,
+    rods: Vec<Rod>,
+    states: PairStates,
+    pending: Vec<Vec<(u32, Pending)>>,
+    settings: SearchSettings,
+    adaptive: Adaptive,
+    verify: Option<Grid>,
+    rng: Xoshiro256PlusPlus,
+    stats: SearchStats,
+    reach: f64,
+}
+
+impl<P: PairPotential> Terraced<P> {
+    /// Rods of `species` with terraced pair potentials `pairs` (every unordered pair of
+    /// species once); body `i` is of species `body_species[i]` (as the loop's bodies) with
+    /// initial axis `axes[i]` and lab angular velocity `omegas[i]` (its component along the
+    /// axis is dropped: rods have no spin) at time `t0`; searches with `settings`, the jitter
+    /// drawn from `seed`.
+    ///
+    /// # Errors
+    /// [`ModelError`].
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        species: Vec<RodSpecies>,
+        pairs: Vec<PairTable<P>>,
+        body_species: &[u32],
+        axes: &[DVec3],
+        omegas: &[DVec3],
+        t0: f64,
+        settings: SearchSettings,
+        seed: u64,
+    ) -> Result<Self, ModelError> {
+        let ns = species.len();
+        for (k, s) in species.iter().enumerate() {
+            for (what, value) in [("mass", s.mass), ("inertia", s.inertia)] {
+                if !(value.is_finite() && value > 0.0) {
+                    return Err(ModelError::Species {
+                        species: k,
+                        what,
+                        value,
+                    });
+                }
+            }
+        }
+        let mut table = vec![u32::MAX; ns * ns];
+        let mut tables = Vec::with_capacity(pairs.len());
+        for ((a, b), terraces) in pairs {
+            if a >= ns || b >= ns {
+                return Err(ModelError::MissingPair(a, b));
+            }
+            let k = tables.len() as u32;
+            tables.push(terraces);
+            table[a * ns + b] = k;
+            table[b * ns + a] = k;
+        }
+        if let Some(k) = table.iter().position(|&t| t == u32::MAX) {
+            return Err(ModelError::MissingPair(k / ns, k % ns));
+        }
+        let reach = tables.iter().map(|t| t.reach).fold(0.0, f64::max);
+        let rods = axes
+            .iter()
+            .zip(omegas)
+            .enumerate()
+            .map(|(i, (&s, &w))| {
+                LinearRotor::new(s, w)
+                    .map(|rotor| Rod { rotor, t: t0 })
+                    .map_err(|e| ModelError::Rotor {
+                        body: i,
+                        problem: e.to_string(),
+                    })
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let adaptive = Adaptive::new(settings.max_step).map_err(ModelError::Search)?;
+        let threshold = match settings.method {
+            SearchMethod::Grid { threshold } => threshold,
+            SearchMethod::Adaptive => 0.0,
+        };
+        Grid::new(settings.max_step, threshold).map_err(ModelError::Search)?;
+        if let Some((i, &s)) = body_species
+            .iter()
+            .enumerate()
+            .find(|&(_, &s)| s as usize >= ns)
+        {
+            return Err(ModelError::Rotor {
+                body: i,
+                problem: format!("species {s} does not exist"),
+            });
+        }
+        assert_eq!(body_species.len(), rods.len(), "one species per body");
+        if !(settings.window > 0.0) {
+            return Err(ModelError::Search(SearchError::BadSetting {
+                name: "window",
+                value: settings.window,
+                why: "> 0",
+            }));
+        }
+        if !(settings.max_change > 0.0) {
+            return Err(ModelError::Search(SearchError::BadSetting {
+                name: "max_change",
+                value: settings.max_change,
+                why: "> 0 (inf: off)",
+            }));
+        }
+        if !(0.0..0.5).contains(&settings.jitter) {
+            return Err(ModelError::Search(SearchError::BadSetting {
+                name: "jitter",
+                value: settings.jitter,
+                why: "in [0, 0.5)",
+            }));
+        }
+        let verify = settings
+            .verify_step
+            .map(|s| Grid::new(s, f64::INFINITY))
+            .transpose()
+            .map_err(ModelError::Search)?;
+        let n = rods.len();
+        Ok(Terraced {
+            n_species: ns,
+            table,
+            pairs: tables,
+            species,
+            body_species: body_species.to_vec(),
+            rods,
+            states: PairStates::new(n),
+            pending: vec![Vec::new(); n],
+            settings,
+            adaptive,
+            verify,
+            rng: Xoshiro256PlusPlus::seed_from_u64(seed),
+            stats: SearchStats::default(),
+            reach,
+        })
+    }
+
+    /// The pair tables.
+    pub fn pairs(&self) -> &[PairTerraces<P>] {
+        &self.pairs
+    }
+
+    /// The terraces of species `a` and `b`.
+    #[inline(always)]
+    pub fn pair(&self, a: u32, b: u32) -> &PairTerraces<P> {
+        &self.pairs[self.table[a as usize * self.n_species + b as usize] as usize]
+    }
+
+    /// The stored terrace of pair `(i, j)` of species `(si, sj)`.
+    #[inline(always)]
+    pub fn terrace(&self, i: u32, j: u32, si: u32, sj: u32) -> usize {
+        let pt = self.pair(si, sj);
+        pt.terrace(self.states.get(i, j)) as usize
+    }
+
+    /// The search settings.
+    pub fn settings(&self) -> &SearchSettings {
+        &self.settings
+    }
+
+    /// `U` of pair `(i, j)` at `now` and separation `dr` (tests and checks).
+    pub fn energy(&self, i: u32, j: u32, si: u32, sj: u32, now: f64, dr: DVec3) -> f64 {
+        let g = PairGeometry::new(
+            dr,
+            self.rods[i as usize].axis(now),
+            self.rods[j as usize].axis(now),
+        );
+        self.pair(si, sj).potential.energy(&g)
+    }
+
+    fn set_pending(&mut self, i: u32, j: u32, what: Pending) {
+        let list = &mut self.pending[i as usize];
+        match list.iter_mut().find(|(p, _)| *p == j) {
+            Some(e) => e.1 = what,
+            None => list.push((j, what)),
+        }
+    }
+
+    fn take_pending(&mut self, i: u32, j: u32) -> Option<Pending> {
+        let list = &mut self.pending[i as usize];
+        let k = list.iter().position(|(p, _)| *p == j)?;
+        Some(list.swap_remove(k).1)
+    }
+
+    /// Runs (or continues) the search of pair `(i, j)` on terrace `k` from `from`.
+    #[allow(clippy::too_many_arguments)]
+    fn search(
+        &mut self,
+        i: u32,
+        j: u32,
+        si: u32,
+        sj: u32,
+        k: u16,
+        now: f64,
+        dr: DVec3,
+        dv: DVec3,
+        from: Pending,
+    ) -> Option<(f64, Kind)> {
+        let pt = &self.pairs[self.table[si as usize * self.n_species + sj as usize] as usize];
+        let band = pt.bands[k as usize];
+        let (ri, rj) = (self.rods[i as usize], self.rods[j as usize]);
+        let (wi, wj) = (ri.rotor.omega(), rj.rotor.omega());
+        let pot = &pt.potential;
+        let clamp = pt.clamp;
+        // U and U̇ (003 Eq. 12) at time t, U clamped deep inside the core.
+        let pair_at = |t: f64| -> (f64, f64) {
+            let g = PairGeometry::new(dr + dv * (t - now), ri.axis(t), rj.axis(t));
+            match pot.evaluate(&g) {
+                Ok(e) if e.energy < clamp => (e.energy, e.rate(dv, wi, wj)),
+                _ => (clamp, 0.0),
+            }
+        };
+        let (t0, end, speed) = match from {
+            Pending::Start { at, end } => (at.max(now), end, f64::NAN),
+            Pending::Resume(s, udot) => (s.time(), s.end(), udot.abs()),
+        };
+        // A start evaluates its first sample here: its U checks the stored terrace and its U̇
+        // limits the steps. The search then finds that sample in the cache.
+        let first = match from {
+            Pending::Start { .. } => Some(pair_at(t0)),
+            Pending::Resume(..) => None,
+        };
+        let speed = first.map_or(speed, |(_, du)| du.abs());
+        let mut last = (t0, speed);
+        let mut indicator = |t: f64| -> (f64, f64) {
+            let (u, du) = match first {
+                Some(x) if t == t0 => x,
+                _ => pair_at(t),
+            };
+            if t >= last.0 {
+                last = (t, du.abs());
+            }
+            band.indicator(u, du)
+        };
+        let jitter = if self.settings.jitter > 0.0 {
+            1.0 - self.settings.jitter * self.rng.random::<f64>()
+        } else {
+            1.0
+        };
+        // The step follows the speed of U: at most `max_change` of the terrace's width per
+        // step at the speed of the call's first sample (never below 1 % of the maximum step).
+        let mut step = self.settings.max_step * jitter;
+        if self.settings.max_change < f64::INFINITY && speed > 0.0 {
+            let limit = self.settings.max_change * band.width / speed;
+            step = step.min(limit.max(0.01 * self.settings.max_step));
+        }
+        let window = self.settings.window;
+        // A bracket without end (no relative motion: only rotation changes U) needs a window.
+        let window = if end == f64::INFINITY && window == f64::INFINITY {
+            1e4 * self.settings.max_step
+        } else {
+            window
+        };
+        let result = match (self.settings.method, from) {
+            (SearchMethod::Adaptive, Pending::Start { .. }) => self
+                .adaptive
+                .with_max_step(step)
+                .and_then(|m| m.start(&mut indicator, t0, end, Crossing::Falling, window)),
+            (SearchMethod::Adaptive, Pending::Resume(s, _)) => self
+                .adaptive
+                .with_max_step(step)
+                .and_then(|m| m.resume(&mut indicator, s, window)),
+            (SearchMethod::Grid { threshold }, Pending::Start { .. }) => Grid::new(step, threshold)
+                .and_then(|m| m.start(&mut indicator, t0, end, Crossing::Falling, window)),
+            (SearchMethod::Grid { threshold }, Pending::Resume(s, _)) => {
+                Grid::new(step, threshold).and_then(|m| m.resume(&mut indicator, s, window))
+            }
+        };
+        self.stats.searches += 1;
+        let report = match result {
+            Ok(r) => r,
+            Err(_) => {
+                self.stats.failures += 1;
+                return None;
+            }
+        };
+        // The cached first sample was evaluated once, here.
+        self.stats.evaluations += u64::from(report.evals.max(1));
+        if let Some((u0, _)) = first {
+            // A pair that starts a search off its terrace has missed an event before.
+            let tol = 1e-6 * band.width;
+            if u0 < band.lo - tol || u0 > band.hi + tol {
+                self.stats.off_terrace += 1;
+            }
+        }
+        let checked_to = match report.outcome {
+            root_search::Outcome::Root(r) => r.t,
+            root_search::Outcome::Suspended(s) => s.time(),
+            root_search::Outcome::NoRoot => end,
+        };
+        if let Some(grid) = self.verify {
+            self.stats.verified += 1;
+            let mut reference = |t: f64| -> (f64, f64) {
+                let (u, du) = pair_at(t);
+                band.indicator(u, du)
+            };
+            // The same interval, searched again from where this call started.
+            let found = grid.start(
+                &mut reference,
+                t0,
+                checked_to,
+                Crossing::Falling,
+                f64::INFINITY,
+            );
+            if let Ok(rep) = found
+                && let Some(tg) = rep.root()
+                && tg < checked_to - 1e-6 * self.settings.max_step
+            {
+                self.stats.verify_misses += 1;
+                if std::env::var_os("DMD_DEBUG_MISSES").is_some() {
+                    eprintln!(
+                        "missed: pair ({i}, {j}) terrace {k} {band:?} search from {t0} to \
+                         {checked_to} (resumed: {}), fine grid root at {tg}",
+                        matches!(from, Pending::Resume(..))
+                    );
+                    for q in 0..=40 {
+                        let t = t0 + (checked_to - t0) * f64::from(q) / 40.0;
+                        let (u, du) = pair_at(t);
+                        eprintln!("  t {t:.9}  U {u:.9}  dU/dt {du:.6e}");
+                    }
+                }
+            }
+        }
+        match report.outcome {
+            root_search::Outcome::Root(r) => {
+                self.stats.roots += 1;
+                let boundary = if band.inv_width == 0.0 {
+                    Boundary::Inner
+                } else {
+                    let g = PairGeometry::new(dr + dv * (r.t - now), ri.axis(r.t), rj.axis(r.t));
+                    let u = pot.energy(&g).min(clamp);
+                    if u > 0.5 * (band.lo + band.hi) {
+                        Boundary::Inner
+                    } else {
+                        Boundary::Outer
+                    }
+                };
+                Some((r.t - now, Kind::Pair(boundary)))
+            }
+            root_search::Outcome::Suspended(s) => {
+                self.stats.suspended += 1;
+                // The last sample is the state's (the search never samples past it).
+                let udot = if last.0 == s.time() { last.1 } else { f64::NAN };
+                self.set_pending(i, j, Pending::Resume(s, udot));
+                Some((s.time() - now, Kind::Virtual))
+            }
+            root_search::Outcome::NoRoot => None,
+        }
+    }
+}
+
+impl<P: PairPotential> PairModel for Terraced<P> {
+    fn reach(&self) -> f64 {
+        self.reach
+    }
+
+    fn n_species(&self) -> usize {
+        self.n_species
+    }
+
+    fn mass(&self, s: u32) -> f64 {
+        self.species[s as usize].mass
+    }
+
+    fn setup_pair(
+        &mut self,
+        i: u32,
+        j: u32,
+        si: u32,
+        sj: u32,
+        dr: DVec3,
+    ) -> Result<(), PairSetupError> {
+        let t = self.rods[i as usize].t;
+        let u = self.energy(i, j, si, sj, t, dr);
+        let pt = self.pair(si, sj);
+        let k = pt
+            .map
+            .terrace_of(u)
+            .map_err(|_| PairSetupError::InsideCore {
+                energy: u,
+                core: pt.map.core(),
+            })?;
+        let v = pt.stored(k as u16);
+        if v != 0 {
+            self.states.set(i, j, v);
+        }
+        Ok(())
+    }
+
+    #[inline]
+    fn predict(
+        &mut self,
+        i: u32,
+        j: u32,
+        si: u32,
+        sj: u32,
+        now: f64,
+        dr: DVec3,
+        dv: DVec3,
+    ) -> Option<(f64, Kind)> {
+        let pt = self.pair(si, sj);
+        let k = if dr.length_squared() > pt.reach2 {
+            pt.zero
+        } else {
+            pt.terrace(self.states.get(i, j))
+        };
+        let band = pt.bands[k as usize];
+        // The bracket: while the centres are within the band's reach.
+        let (start, end) = bracket(dr, dv, band.reach * band.reach)?;
+        if start.is_nan() || end.is_nan() {
+            self.stats.failures += 1;
+            return None;
+        }
+        let (start, end) = (now + start, now + end);
+        if start > now {
+            // Not yet within reach: start searching when the pair gets there.
+            self.stats.deferred += 1;
+            self.set_pending(i, j, Pending::Start { at: start, end });
+            return Some((start - now, Kind::Virtual));
+        }
+        self.search(
+            i,
+            j,
+            si,
+            sj,
+            k,
+            now,
+            dr,
+            dv,
+            Pending::Start { at: now, end },
+        )
+    }
+
+    fn resume(
+        &mut self,
+        i: u32,
+        j: u32,
+        si: u32,
+        sj: u32,
+        now: f64,
+        dr: DVec3,
+        dv: DVec3,
+    ) -> Option<(f64, Kind)> {
+        let from = self.take_pending(i, j)?;
+        let pt = self.pair(si, sj);
+        let k = pt.terrace(self.states.get(i, j));
+        self.search(i, j, si, sj, k, now, dr, dv, from)
+    }
+
+    fn execute(
+        &mut self,
+        i: u32,
+        j: u32,
+        si: u32,
+        sj: u32,
+        now: f64,
+        boundary: Boundary,
+        dr: DVec3,
+        vi: &mut DVec3,
+        vj: &mut DVec3,
+    ) -> Result<Executed, collide::CollideError> {
+        let table = self.table[si as usize * self.n_species + sj as usize] as usize;
+        let pt = &self.pairs[table];
+        let v = self.states.get(i, j);
+        let k = pt.terrace(v);
+        let band = pt.bands[k as usize];
+        let (ri, rj) = (self.rods[i as usize], self.rods[j as usize]);
+        let (ai, aj) = (ri.axis(now), rj.axis(now));
+        let (wi, wj) = (ri.rotor.omega(), rj.rotor.omega());
+        let skipped = |overlap| Executed {
+            class: PairClass::Skipped,
+            delta_u: 0.0,
+            virial: 0.0,
+            overlap,
+        };
+        let Ok(e) = pt.potential.evaluate(&PairGeometry::new(dr, ai, aj)) else {
+            // Deep inside the core (beyond binary64): the terraces were stepped over.
+            return Ok(skipped(true));
+        };
+        let udot = e.rate(*vi - *vj, wi, wj);
+        let (level, step, right_way) = match boundary {
+            Boundary::Inner => (band.hi, band.up, udot > 0.0),
+            Boundary::Outer => (band.lo, band.down, udot < 0.0),
+        };
+        // U must be at the level up to the root tolerance (1e-10 of the step, in time) and
+        // round-off; anything more is an event that was not where it was predicted.
+        let root_tol = 1e-10 * self.settings.max_step;
+        let tol = 1e-9 * (level.abs() + band.width()) + 8.0 * udot.abs() * root_tol;
+        if !((e.energy - level).abs() <= tol) {
+            self.stats.misfits += 1;
+        }
+        if !right_way {
+            return Ok(skipped(false));
+        }
+        let spi = self.species[si as usize];
+        let spj = self.species[sj as usize];
+        let bi = LinearBody::new(spi.mass, spi.inertia, ai)?;
+        let bj = LinearBody::new(spj.mass, spj.inertia, aj)?;
+        let out = terrace(
+            &bi,
+            &bj,
+            Velocity::new(*vi, wi),
+            Velocity::new(*vj, wj),
+            &PairForce::new(e.force, e.torque_i, e.torque_j),
+            step,
+        )?;
+        *vi = out.i.linear;
+        *vj = out.j.linear;
+        let rod = |axis, omega| -> Result<Rod, collide::CollideError> {
+            LinearRotor::new(axis, omega)
+                .map(|rotor| Rod { rotor, t: now })
+                .map_err(|_| collide::CollideError::NotFinite("angular velocity after the impulse"))
+        };
+        self.rods[i as usize] = rod(ai, out.i.angular)?;
+        self.rods[j as usize] = rod(aj, out.j.angular)?;
+        let class = match (out.impulse.outcome, boundary) {
+            (Outcome::Reflected, Boundary::Inner) if step == f64::INFINITY => PairClass::Core,
+            (Outcome::Reflected, _) => PairClass::StepReflect,
+            (Outcome::Crossed, Boundary::Inner) => {
+                let pt = &self.pairs[table];
+                self.states.set(i, j, pt.stored(k + 1));
+                PairClass::StepIn
+            }
+            (Outcome::Crossed, Boundary::Outer) => {
+                let pt = &self.pairs[table];
+                self.states.set(i, j, pt.stored(k - 1));
+                PairClass::StepOut
+            }
+        };
+        Ok(Executed {
+            class,
+            delta_u: out.impulse.delta_v,
+            virial: out.impulse.s * dr.dot(e.force),
+            overlap: false,
+        })
+    }
+
+    #[inline]
+    fn pair_energy(&self, i: u32, j: u32, si: u32, sj: u32) -> f64 {
+        let v = self.states.get(i, j);
+        if v == 0 {
+            return 0.0;
+        }
+        let pt = self.pair(si, sj);
+        pt.map.energies()[pt.terrace(v) as usize]
+    }
+
+    fn check_pair(
+        &self,
+        i: u32,
+        j: u32,
+        si: u32,
+        sj: u32,
+        now: f64,
+        dr: DVec3,
+        listed: bool,
+    ) -> Result<(), String> {
+        let pt = self.pair(si, sj);
+        let d = dr.length();
+        if d < pt.reach && !listed {
+            return Err(format!(
+                "pair ({i}, {j}) interacts at {d} but is not listed"
+            ));
+        }
+        let u = self.energy(i, j, si, sj, now, dr);
+        let stored = pt.terrace(self.states.get(i, j)) as usize;
+        let expected = pt.map.terrace_of(u).map_err(|_| {
+            format!(
+                "pair ({i}, {j}) is inside the hard core: U = {u}, core {}",
+                pt.map.core()
+            )
+        })?;
+        if stored != expected {
+            // Allowed only at the level between them, within round-off.
+            let at = pt.map.levels()[stored.max(expected) - 1];
+            let band = pt.bands[stored];
+            if stored.abs_diff(expected) > 1 || (u - at).abs() > 1e-7 * band.width() {
+                return Err(format!(
+                    "pair ({i}, {j}) with U = {u} is stored on terrace {stored}, its energy says \
+                     terrace {expected}"
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    #[inline]
+    fn forget(&mut self, i: u32) {
+        self.pending[i as usize].clear();
+    }
+
+    fn rebase(&mut self, t0: f64) {
+        // Re-anchor every rotor at the new origin, so that rotation angles stay small.
+        for r in &mut self.rods {
+            if let Ok(rotor) = LinearRotor::new(r.axis(t0), r.rotor.omega()) {
+                r.rotor = rotor;
+                r.t = 0.0;
+            } else {
+                // Not finite (a broken invariant, reported elsewhere): keep the old anchor.
+                r.t -= t0;
+            }
+        }
+    }
+
+    fn rotational_kinetic(&self) -> f64 {
+        let mut k = crate::sum::Compensated::ZERO;
+        for (r, s) in self.rods.iter().zip(self.body_species()) {
+            k.add(0.5 * self.species[s as usize].inertia * r.rotor.omega().length_squared());
+        }
+        k.value()
+    }
+
+    fn rotational_dof(&self) -> f64 {
+        2.0 * self.rods.len() as f64
+    }
+
+    fn thermalize(
+        &mut self,
+        i: u32,
+        s: u32,
+        now: f64,
+        kt: f64,
+        rng: &mut Xoshiro256PlusPlus,
+    ) -> f64 {
+        let inertia = self.species[s as usize].inertia;
+        let r = self.rods[i as usize];
+        let axis = r.axis(now);
+        let w = draw_omega(axis, inertia, kt, rng);
+        let Ok(rotor) = LinearRotor::new(axis, w) else {
+            return 0.0;
+        };
+        let dk =
+            0.5 * inertia * (rotor.omega().length_squared() - r.rotor.omega().length_squared());
+        self.rods[i as usize] = Rod { rotor, t: now };
+        dk
+    }
+
+    #[inline]
+    fn spin(&self, i: u32, s: u32) -> DVec3 {
+        self.species[s as usize].inertia * self.rods[i as usize].rotor.omega()
+    }
+
+    #[inline]
+    fn omega(&self, i: u32) -> DVec3 {
+        self.rods[i as usize].rotor.omega()
+    }
+
+    #[inline]
+    fn axis(&self, i: u32, now: f64) -> Option<DVec3> {
+        Some(self.rods[i as usize].axis(now))
+    }
+
+    fn search_stats(&self) -> Option<SearchStats> {
+        Some(self.stats)
+    }
+}
+
+impl<P> Terraced<P> {
+    /// Species of every body.
+    fn body_species(&self) -> impl Iterator<Item = u32> + '_ {
+        self.body_species.iter().copied()
+    }
+}
+
+/// The times `(enter, exit)` from now during which `|dr + dv t|² ≤ R²` (`enter = 0` for a pair
+/// already inside), or `None` if the pair never comes within `R` from now on. Each root is
+/// taken in the form without cancellation, as `root_search::sphere_window` (the tests compare
+/// them), with a quick exit for receding pairs outside and no square root before it.
+#[inline(always)]
+fn bracket(dr: DVec3, dv: DVec3, radius2: f64) -> Option<(f64, f64)> {
+    let r2 = dr.length_squared();
+    let b = dr.dot(dv);
+    let c = r2 - radius2;
+    if c > 0.0 {
+        if b >= 0.0 {
+            return None;
+        }
+        let v2 = dv.length_squared();
+        let disc = b * b - v2 * c;
+        if disc <= 0.0 {
+            return None;
+        }
+        let q = -b + disc.sqrt();
+        Some((c / q, q / v2))
+    } else {
+        let v2 = dv.length_squared();
+        if v2 == 0.0 {
+            return Some((0.0, f64::INFINITY));
+        }
+        let sq = (b * b - v2 * c).max(0.0).sqrt();
+        let exit = if b > 0.0 {
+            -c / (b + sq)
+        } else {
+            (-b + sq) / v2
+        };
+        Some((0.0, exit))
+    }
+}
+
+/// A lab angular velocity for a rod with axis `axis` drawn from equipartition at `kt`: each of
+/// the two components perpendicular to the axis Gaussian with variance `kT / I`.
+pub fn draw_omega(axis: DVec3, inertia: f64, kt: f64, rng: &mut Xoshiro256PlusPlus) -> DVec3 {
+    let g = DVec3::new(
+        StandardNormal.sample(rng),
+        StandardNormal.sample(rng),
+        StandardNormal.sample(rng),
+    ) * (kt / inertia).sqrt();
+    let s = axis.normalize();
+    g - s * s.dot(g)
+}
+
+/// The terraces of an isotropic potential as the radial steps of a stepped potential: the
+/// equivalent `[radius, ΔU]` table of [`StepPotential`](crate::potential::StepPotential),
+/// whose event times are analytic (no root search), with the hard core where `U = U_core`.
+///
+/// A negative level `U_m` is crossed twice along `r`: on the attractive branch (outer radius,
+/// inwards the pair falls from terrace `m + 1` to `m`) and on the repulsive branch (inner
+/// radius, inwards it climbs back); a positive level only on the repulsive branch.
+///
+/// # Errors
+/// The profile's errors (a level below the minimum, or never reached).
+pub fn radial_steps<F: Fn(f64) -> f64>(
+    profile: &potential::Profile<F>,
+    map: &TerraceMap,
+) -> Result<Vec<[f64; 2]>, PotentialError> {
+    let v = map.energies();
+    let mut steps = vec![[profile.inner_radius(map.core())?, f64::INFINITY]];
+    for (m, &u) in map.levels().iter().enumerate() {
+        let climb = v[m + 1] - v[m];
+        steps.push([profile.inner_radius(u)?, climb]);
+        if u < 0.0 {
+            steps.push([profile.outer_radius(u)?, -climb]);
+        }
+    }
+    steps.sort_by(|a, b| a[0].total_cmp(&b[0]));
+    Ok(steps)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+    use root_search::sphere_window;
+
+    proptest! {
+        /// The bracket agrees with the reference of `root_search`.
+        #[test]
+        fn bracket_matches_sphere_window(
+            r in prop::array::uniform3(-3.0f64..3.0),
+            v in prop::array::uniform3(-2.0f64..2.0),
+            radius in 0.5f64..2.0,
+        ) {
+            let (dr, dv) = (DVec3::from(r), DVec3::from(v));
+            prop_assume!(dv.length() > 1e-3);
+            let ours = bracket(dr, dv, radius * radius);
+            let reference = sphere_window(r, v, radius).unwrap().and_then(|w| w.after(0.0));
+            match (ours, reference) {
+                (Some((a, b)), Some((c, d))) => {
+                    prop_assert!((a - c).abs() <= 1e-9 * (1.0 + c.abs()), "enter {a} vs {c}");
+                    prop_assert!((b - d).abs() <= 1e-9 * (1.0 + d.abs()), "exit {b} vs {d}");
+                }
+                (None, None) => {}
+                (x, y) => {
+                    // Only a course tangent to within round-off may be judged differently.
+                    let b = dr.dot(dv);
+                    let closest = (dr - dv * (b / dv.length_squared())).length();
+                    prop_assert!((closest - radius).abs() < 1e-7, "{x:?} vs {y:?}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn bands_watch_both_levels() {
+        let b = Band {
+            lo: -1.0,
+            hi: 0.5,
+            inv_width: 1.0 / 1.5,
+            width: 1.5,
+            reach: 2.0,
+            up: 0.5,
+            down: -0.5,
+        };
+        // Positive inside, zero on either level, negative outside; slopes of ±U̇ at the levels.
+        assert!(b.indicator(0.0, 1.0).0 > 0.0);
+        assert_eq!(b.indicator(-1.0, 2.0), (0.0, 2.0));
+        assert_eq!(b.indicator(0.5, 2.0), (0.0, -2.0));
+        assert!(b.indicator(0.7, 0.0).0 < 0.0 && b.indicator(-1.2, 0.0).0 < 0.0);
+        // Terrace 0: only the level above.
+        let b0 = Band {
+            lo: f64::NEG_INFINITY,
+            inv_width: 0.0,
+            ..b
+        };
+        assert_eq!(b0.indicator(0.25, 3.0), (0.25, -3.0));
+    }
+}
