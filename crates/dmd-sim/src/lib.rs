@@ -45,6 +45,7 @@
 pub mod body;
 pub mod cell;
 pub mod event;
+pub mod hmc;
 pub mod init;
 pub mod model;
 pub mod neighbour;

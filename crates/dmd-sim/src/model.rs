@@ -102,6 +102,58 @@ pub trait PairModel {
 
     /// The potentials.
     fn potentials(&self) -> &Potentials;
+
+    // ----- Hybrid Monte Carlo and checkpoints (issue 9) ---------------------------------------
+    // Hooks with defaults that do nothing, right for spheres (no state beyond the `Body` record
+    // and the pair levels). A rigid model keeps attitudes and angular velocities in its own
+    // arrays and implements them (see docs/ARCHITECTURE.md, "Hybrid Monte Carlo").
+
+    /// Forgets every stored pair level (every pair back on level 0). HMC calls it before it
+    /// sets the levels a configuration's distances give, after a segment with missed events.
+    fn clear_levels(&mut self) {}
+
+    /// Rotational kinetic energy of all bodies (part of the HMC Hamiltonian; 0 for spheres).
+    fn rotational_kinetic(&self) -> f64 {
+        0.0
+    }
+
+    /// Draws every body's angular velocity from its Gaussian (Maxwell–Boltzmann) distribution
+    /// at `temperature` (the canonical HMC refresh, 000 §V). Called with every body at the
+    /// present time; the loop re-predicts every event afterwards.
+    fn draw_rotations(&mut self, _temperature: f64, _rng: &mut rand_xoshiro::Xoshiro256PlusPlus) {}
+
+    /// Exchanges the angular velocities of bodies `i` and `j` (of one species): the
+    /// microcanonical HMC refresh (000 §V).
+    fn exchange_rotations(&mut self, _i: u32, _j: u32) {}
+
+    /// Reverses every angular velocity (an HMC rejection reverses the momenta).
+    fn reverse_rotations(&mut self) {}
+
+    /// HMC begins segment number `segment` (the fault-injection wrapper of `hmc` re-draws
+    /// which pairs it hides; models do nothing).
+    fn begin_segment(&mut self, _segment: u64) {}
+
+    /// The model's per-body state beyond the `Body` record and the pair levels (attitudes,
+    /// angular velocities), as numbers, at a re-basing of the time origin: HMC snapshots and
+    /// checkpoints. Empty for spheres.
+    fn extra_state(&self) -> Vec<f64> {
+        Vec::new()
+    }
+
+    /// Restores what [`extra_state`](Self::extra_state) returned.
+    ///
+    /// # Errors
+    /// A description when `state` does not fit the model (a checkpoint of another scene).
+    fn set_extra_state(&mut self, state: &[f64]) -> Result<(), String> {
+        if state.is_empty() {
+            Ok(())
+        } else {
+            Err(format!(
+                "the model keeps no state beyond positions and velocities, but {} numbers were given",
+                state.len()
+            ))
+        }
+    }
 }
 
 /// Roots of `|dr + dv t|² = R²` for an approaching pair entering the sphere: the earliest
@@ -391,6 +443,10 @@ impl PairModel for Stepped {
 
     fn set_level(&mut self, i: u32, j: u32, level: u16) {
         self.states.set(i, j, level);
+    }
+
+    fn clear_levels(&mut self) {
+        self.states = PairStates::new(self.states.n_bodies());
     }
 
     fn potentials(&self) -> &Potentials {
