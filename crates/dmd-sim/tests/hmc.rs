@@ -126,6 +126,7 @@ fn sample<M: PairModel>(sim: &mut Simulation<M, Queue>, chain: &mut Chain, n: us
 /// it robust to changes of seed.
 fn assert_matches(s: &Sampled, what: &str) {
     let exact = exact_levels();
+    #[allow(clippy::needless_range_loop)]
     for k in 0..2 {
         let err = s.errors[k].max(1e-4);
         assert!(
