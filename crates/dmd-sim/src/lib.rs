@@ -44,6 +44,7 @@
 
 pub mod body;
 pub mod cell;
+pub mod chains;
 pub mod checkpoint;
 pub mod event;
 pub mod hmc;

@@ -52,6 +52,14 @@ pub enum RunError {
     /// Stopped after a checkpoint, as [`RunOptions::halt_after_checkpoint`] asked.
     #[error("halted after writing a checkpoint, as asked")]
     Halted,
+    /// A job of an ensemble of chains or sweep points failed (issue 9).
+    #[error("job {job}: {source}")]
+    Job {
+        /// The job's folder.
+        job: String,
+        /// Why.
+        source: Box<RunError>,
+    },
 }
 
 /// What a run does besides the scene (issue 9): checkpoints, and resuming from one.

@@ -232,7 +232,7 @@ fn main() -> ExitCode {
                 file: scene.clone(),
             };
             if s.chains.is_some() || s.sweep.is_some() {
-                return run_ensemble(&scene, source, &out, every, threads, quiet);
+                return run_ensemble(&scene, &s, source, &out, every, threads, quiet);
             }
             let options = RunOptions {
                 checkpoint_every: every,
@@ -344,16 +344,63 @@ fn resume(path: PathBuf, out: Option<PathBuf>, quiet: bool, every: Option<String
     }
 }
 
-/// `dmd run` of a scene with `[chains]` or `[sweep]`.
+/// `dmd run` of a scene with `[chains]` or `[sweep]`: the jobs in parallel, then the
+/// aggregate.
 fn run_ensemble(
     scene: &std::path::Path,
+    s: &Scene,
     source: SceneSource,
     out: &std::path::Path,
     every: Option<Every>,
     threads: Option<usize>,
     quiet: bool,
 ) -> ExitCode {
-    let _ = (scene, source, out, every, threads, quiet);
-    eprintln!("dmd: chains and sweeps are not available yet");
-    ExitCode::FAILURE
+    let done = |k: usize, n: usize| {
+        if !quiet {
+            eprintln!("dmd: {k} of {n} jobs done");
+        }
+    };
+    match dmd_sim::chains::run_ensemble(s, &source, out, threads, every, &done) {
+        Ok(e) => {
+            if !quiet {
+                print_ensemble(&e, out);
+            }
+            ExitCode::SUCCESS
+        }
+        Err(dmd_sim::run::RunError::Scene(e)) => {
+            eprintln!("dmd: {}: {e}", scene.display());
+            ExitCode::from(2)
+        }
+        Err(e) => {
+            eprintln!("dmd: {}: {e}", scene.display());
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn print_ensemble(e: &dmd_sim::chains::Ensemble, out: &std::path::Path) {
+    println!(
+        "dmd: {} point(s) × {} chain(s){}",
+        e.points.len(),
+        e.chains,
+        e.key
+            .as_ref()
+            .map(|k| format!(", sweep over {k}"))
+            .unwrap_or_default()
+    );
+    for p in &e.points {
+        if let Some(v) = &p.value {
+            println!("  {} = {v}", e.key.as_deref().unwrap_or("value"));
+        }
+        for (name, q) in &p.quantities {
+            match q.error {
+                Some(err) => println!("    {name:<36} {:.6} ± {err:.6}", q.mean),
+                None => println!("    {name:<36} {:.6}", q.mean),
+            }
+        }
+    }
+    println!(
+        "  wrote {}/ensemble.json, ensemble.csv and one folder per job",
+        out.display()
+    );
 }

@@ -1,0 +1,333 @@
+//! Independent chains and parameter sweeps of one scene, run in parallel (issue 9).
+//!
+//! A scene with `[chains] count = C` and/or `[sweep] key = "…", values = [v₀, v₁, …]` is a set
+//! of **jobs**: for every sweep point `p` (the key set to `v_p`, as `--set` would) and every
+//! chain `c`, the scene with `seed` replaced by a seed derived from the scene's seed and `c`
+//! alone (so chain `c` of every point shares its random numbers: differences between points
+//! are smoother). Each job is an ordinary single-threaded run writing its own folder
+//! (`DIR/point-P/chain-C/`); rayon runs the jobs on a pool of the requested size, and the
+//! results are put in job order, so **the results do not depend on the number of threads**
+//! (each job is deterministic, and nothing is shared between jobs).
+//!
+//! The aggregate (`DIR/ensemble.json`, `DIR/ensemble.csv`) gives per point and quantity the
+//! mean over chains, its standard error from the scatter between chains (independent runs, so
+//! the plain `s/√C`, with `C ≥ 2`), and, for the HMC chain averages, the block-average error
+//! of each chain combined over chains (`√Σσ_c² / C`): two estimates that must agree.
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::checkpoint::{Every, SceneSource};
+use crate::output::{OutputError, write_atomically, write_csv};
+use crate::run::{Quiet, RunError, RunOptions, Summary, run_scene_with};
+use crate::scene::{Scene, SceneError};
+
+/// One run of an ensemble.
+#[derive(Clone, Debug)]
+pub struct Job {
+    /// Sweep point.
+    pub point: usize,
+    /// Chain.
+    pub chain: usize,
+    /// The overrides that make its scene from the scene text.
+    pub overrides: Vec<String>,
+    /// Its scene.
+    pub scene: Scene,
+    /// Its folder, relative to the output folder.
+    pub dir: PathBuf,
+}
+
+/// The seed of chain `c` of a scene seeded `seed` (SplitMix64 of both: chains differ in every
+/// bit, and chain `c` is the same at every sweep point).
+pub fn chain_seed(seed: u64, c: u64) -> u64 {
+    let mut z = seed ^ (c.wrapping_add(1)).wrapping_mul(0x9e37_79b9_7f4a_7c15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    (z ^ (z >> 31)) >> 1
+}
+
+/// The jobs of a scene read from `text` with `overrides`.
+///
+/// # Errors
+/// The [`SceneError`] of a point (under `sweep.values[k]`).
+pub fn jobs(scene: &Scene, text: &str, overrides: &[String]) -> Result<Vec<Job>, SceneError> {
+    let points = scene.sweep.as_ref().map_or(1, |s| s.values.len());
+    let chains = scene.chains.as_ref().map_or(1, |c| c.count as usize);
+    let mut out = Vec::with_capacity(points * chains);
+    for p in 0..points {
+        let point = scene.sweep_point(text, overrides, p)?;
+        for c in 0..chains {
+            let mut o = overrides.to_vec();
+            if let Some(sw) = &scene.sweep {
+                o.push(format!("{}={}", sw.key, sw.values[p]));
+                o.push("sweep=".to_owned());
+            }
+            if scene.chains.is_some() {
+                o.push("chains=".to_owned());
+                o.push(format!("seed={}", chain_seed(point.seed, c as u64)));
+            }
+            let job_scene = Scene::from_str_with(text, &o)?;
+            let mut dir = PathBuf::new();
+            if scene.sweep.is_some() {
+                dir.push(format!("point-{p}"));
+            }
+            if scene.chains.is_some() {
+                dir.push(format!("chain-{c}"));
+            }
+            out.push(Job {
+                point: p,
+                chain: c,
+                overrides: o,
+                scene: job_scene,
+                dir,
+            });
+        }
+    }
+    Ok(out)
+}
+
+/// Mean and errors of one quantity at one point.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct Estimate {
+    /// Mean over chains.
+    pub mean: f64,
+    /// Standard error from the scatter between chains (`null` with one chain).
+    pub error: Option<f64>,
+    /// Block-average errors of the chains combined (HMC chain averages only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub block_error: Option<f64>,
+    /// Each chain's value.
+    pub values: Vec<f64>,
+}
+
+/// One sweep point of the aggregate.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct Point {
+    /// The swept value (as TOML text), if a sweep.
+    pub value: Option<String>,
+    /// Quantities by name.
+    pub quantities: std::collections::BTreeMap<String, Estimate>,
+}
+
+/// `ensemble.json`.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct Ensemble {
+    /// The swept key, if any.
+    pub key: Option<String>,
+    /// Chains per point.
+    pub chains: usize,
+    /// The points.
+    pub points: Vec<Point>,
+    /// Job folders, in job order.
+    pub jobs: Vec<String>,
+}
+
+/// Summary fields aggregated (dotted paths into `summary.json`), and for HMC chain averages
+/// the path of their block error.
+const QUANTITIES: &[(&str, Option<&str>)] = &[
+    ("temperature", None),
+    ("pressure", None),
+    ("compressibility", None),
+    ("potential_energy_per_body", None),
+    ("collision_rate", None),
+    ("mean_free_time", None),
+    ("diffusion_msd", None),
+    ("diffusion_vacf", None),
+    ("hmc.acceptance_rate", None),
+    ("hmc.exp_minus_beta_delta_h", None),
+    (
+        "hmc.potential_energy_per_body.mean",
+        Some("hmc.potential_energy_per_body.error"),
+    ),
+    (
+        "hmc.kinetic_energy_per_body.mean",
+        Some("hmc.kinetic_energy_per_body.error"),
+    ),
+];
+
+fn field(v: &serde_json::Value, path: &str) -> Option<f64> {
+    path.split('.')
+        .try_fold(v, |v, k| v.get(k))
+        .and_then(serde_json::Value::as_f64)
+}
+
+/// Aggregates the summaries of `jobs` (in job order).
+pub fn aggregate(scene: &Scene, jobs: &[Job], summaries: &[Summary]) -> Ensemble {
+    let points = scene.sweep.as_ref().map_or(1, |s| s.values.len());
+    let chains = scene.chains.as_ref().map_or(1, |c| c.count as usize);
+    let values: Vec<serde_json::Value> = summaries
+        .iter()
+        .map(|s| serde_json::to_value(s).expect("a summary serialises"))
+        .collect();
+    let mut out = Vec::with_capacity(points);
+    for p in 0..points {
+        let of_point: Vec<&serde_json::Value> = jobs
+            .iter()
+            .zip(&values)
+            .filter(|(j, _)| j.point == p)
+            .map(|(_, v)| v)
+            .collect();
+        let mut quantities = std::collections::BTreeMap::new();
+        for &(name, block) in QUANTITIES {
+            let xs: Vec<f64> = of_point.iter().filter_map(|v| field(v, name)).collect();
+            if xs.len() != of_point.len() || xs.is_empty() {
+                continue;
+            }
+            let n = xs.len() as f64;
+            let mean = xs.iter().sum::<f64>() / n;
+            let error = (xs.len() >= 2).then(|| {
+                let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
+                (var / n).sqrt()
+            });
+            let block_error = block.and_then(|b| {
+                let es: Vec<f64> = of_point.iter().filter_map(|v| field(v, b)).collect();
+                (es.len() == xs.len()).then(|| es.iter().map(|e| e * e).sum::<f64>().sqrt() / n)
+            });
+            quantities.insert(
+                name.to_owned(),
+                Estimate {
+                    mean,
+                    error,
+                    block_error,
+                    values: xs,
+                },
+            );
+        }
+        out.push(Point {
+            value: scene.sweep.as_ref().map(|s| s.values[p].to_string()),
+            quantities,
+        });
+    }
+    Ensemble {
+        key: scene.sweep.as_ref().map(|s| s.key.clone()),
+        chains,
+        points: out,
+        jobs: jobs
+            .iter()
+            .map(|j| j.dir.to_string_lossy().into_owned())
+            .collect(),
+    }
+}
+
+/// Runs every job of a scene on `threads` threads (all cores if `None`), each into its folder
+/// under `out` (with checkpoints every `every`), and writes `ensemble.json` and `ensemble.csv`.
+/// `done(finished, total)` is called as jobs finish (from worker threads).
+///
+/// # Errors
+/// The first failing job's [`RunError`] (the others still run and write their folders), a
+/// scene error of a point, or an output error.
+pub fn run_ensemble(
+    scene: &Scene,
+    source: &SceneSource,
+    out: &Path,
+    threads: Option<usize>,
+    every: Option<Every>,
+    done: &(dyn Fn(usize, usize) + Sync),
+) -> Result<Ensemble, RunError> {
+    let jobs = jobs(scene, &source.text, &source.overrides)?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.unwrap_or(0))
+        .build()
+        .map_err(|e| OutputError {
+            path: out.to_owned(),
+            message: format!("cannot start the worker threads: {e}"),
+        })?;
+    let finished = AtomicUsize::new(0);
+    let total = jobs.len();
+    let results: Vec<Result<Summary, RunError>> = pool.install(|| {
+        jobs.par_iter()
+            .map(|j| {
+                let options = RunOptions {
+                    checkpoint_every: every,
+                    source: Some(SceneSource {
+                        overrides: j.overrides.clone(),
+                        ..source.clone()
+                    }),
+                    resume: None,
+                    halt_after_checkpoint: false,
+                };
+                let r = run_scene_with(
+                    &j.scene,
+                    &source.base,
+                    Some(&out.join(&j.dir)),
+                    &mut Quiet,
+                    &options,
+                );
+                done(finished.fetch_add(1, Ordering::Relaxed) + 1, total);
+                r
+            })
+            .collect()
+    });
+    let mut summaries = Vec::with_capacity(total);
+    for (j, r) in jobs.iter().zip(results) {
+        match r {
+            Ok(s) => summaries.push(s),
+            Err(e) => {
+                return Err(RunError::Job {
+                    job: j.dir.display().to_string(),
+                    source: Box::new(e),
+                });
+            }
+        }
+    }
+    let ensemble = aggregate(scene, &jobs, &summaries);
+    let json = serde_json::to_string_pretty(&ensemble).expect("an ensemble serialises");
+    write_atomically(&out.join("ensemble.json"), json.as_bytes())?;
+    write_table(&out.join("ensemble.csv"), &ensemble)?;
+    Ok(ensemble)
+}
+
+/// `ensemble.csv`: per point the swept value (its index if not a number) and the mean and
+/// error of each quantity present at every point.
+fn write_table(path: &Path, e: &Ensemble) -> Result<(), OutputError> {
+    let names: Vec<&String> = e.points[0]
+        .quantities
+        .keys()
+        .filter(|k| e.points.iter().all(|p| p.quantities.contains_key(*k)))
+        .collect();
+    let mut header = vec!["point".to_owned(), "value".to_owned()];
+    for n in &names {
+        header.push((*n).clone());
+        header.push(format!("{n}_error"));
+    }
+    let rows: Vec<Vec<f64>> = e
+        .points
+        .iter()
+        .enumerate()
+        .map(|(k, p)| {
+            let mut row = vec![
+                k as f64,
+                p.value
+                    .as_deref()
+                    .and_then(|v| v.parse().ok())
+                    .unwrap_or(f64::NAN),
+            ];
+            for n in &names {
+                let q = &p.quantities[*n];
+                row.push(q.mean);
+                row.push(q.error.unwrap_or(f64::NAN));
+            }
+            row
+        })
+        .collect();
+    let header: Vec<&str> = header.iter().map(String::as_str).collect();
+    write_csv(path, &header, &rows)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn chain_seeds_differ_and_are_non_negative_toml_integers() {
+        let s: Vec<u64> = (0..100).map(|c| chain_seed(1, c)).collect();
+        for (k, a) in s.iter().enumerate() {
+            assert!(*a < 1 << 63, "TOML integers are signed 64-bit");
+            assert!(!s[..k].contains(a));
+        }
+        assert_ne!(chain_seed(1, 0), chain_seed(2, 0));
+    }
+}
