@@ -161,7 +161,7 @@ pub struct HmcStats {
     pub delta_h_finite: u64,
     /// Largest `|ΔH|` among finite ones.
     pub delta_h_max_abs: f64,
-    /// `Σ e^{−βΔH}` (an infinite `ΔH` adds 0); its mean is 1 for a correct chain.
+    /// `Σ e^{−βΔH}` (an infinite `ΔH` adds 0); see [`HmcSummary::exp_minus_beta_delta_h`].
     pub exp_sum: f64,
     /// `ΔH` histogram counts over `±range · T`.
     pub histogram: Vec<u64>,
@@ -547,8 +547,11 @@ pub struct HmcSummary {
     pub delta_h_mean: f64,
     /// Largest finite `|ΔH|`.
     pub delta_h_max_abs: f64,
-    /// `⟨e^{−βΔH}⟩`, 1 for a correct chain (an identity of reversible, volume-preserving
-    /// dynamics started from the ensemble; 000 §V).
+    /// `⟨e^{−βΔH}⟩` over the segments (an infinite `ΔH` counts 0). For reversible,
+    /// volume-preserving segments started from the ensemble it equals the probability that a
+    /// segment run backwards from an allowed state also starts in one: 1 when no segment can
+    /// end in an overlap, else `1 −` the fraction of segments that end in one (the same
+    /// fraction forwards and backwards). `⟨e^{−βΔH}⟩ + overlap rate = 1` is the check.
     pub exp_minus_beta_delta_h: f64,
     /// `ΔH` histogram.
     pub delta_h_histogram: Histogram,
@@ -561,13 +564,15 @@ pub struct HmcSummary {
 }
 
 /// Fault injection (a validation tool, see the module documentation): wraps a model and hides
-/// a fraction of the pairs from the event predictions in each segment.
+/// a fraction of the pairs from the event predictions in each HMC segment. Before the first
+/// segment (plain equilibration) it hides nothing.
 #[derive(Clone, Debug)]
 pub struct Faulty<M> {
     inner: M,
     threshold: u64,
     salt: u64,
     key: u64,
+    active: bool,
 }
 
 impl<M> Faulty<M> {
@@ -579,6 +584,7 @@ impl<M> Faulty<M> {
             threshold,
             salt: mix(seed ^ 0xfa17_0000_0000_0009),
             key: 0,
+            active: false,
         }
     }
 
@@ -586,7 +592,7 @@ impl<M> Faulty<M> {
     #[inline]
     pub fn blind(&self, i: u32, j: u32) -> bool {
         let (a, b) = if i < j { (i, j) } else { (j, i) };
-        mix(self.key ^ (u64::from(a) << 32 | u64::from(b))) < self.threshold
+        self.active && mix(self.key ^ (u64::from(a) << 32 | u64::from(b))) < self.threshold
     }
 
     /// The wrapped model.
@@ -676,6 +682,7 @@ impl<M: PairModel> PairModel for Faulty<M> {
 
     fn begin_segment(&mut self, segment: u64) {
         self.key = mix(self.salt ^ segment);
+        self.active = true;
         self.inner.begin_segment(segment);
     }
 
