@@ -47,7 +47,7 @@ enum Command {
         /// segments). `dmd resume` continues the run.
         #[arg(long, value_name = "EVENTS|TIME")]
         checkpoint_every: Option<String>,
-        /// Threads for the jobs of a scene with [chains] or [sweep] (default: all cores).
+        /// Threads for the jobs of a scene with `[chains]` or `[sweep]` (default: all cores).
         /// Results do not depend on it.
         #[arg(long)]
         threads: Option<usize>,
