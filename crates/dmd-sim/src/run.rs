@@ -510,7 +510,14 @@ impl Context<'_> {
         }
         let (k0, e0, p0, p_scale) = run.record.start.expect("set when production starts");
         let p0 = DVec3::from_array(p0);
-        reporter.phase("production", stop);
+        reporter.phase(
+            if scene.hmc.is_some() {
+                "hmc production"
+            } else {
+                "production"
+            },
+            stop,
+        );
         let wall = Instant::now();
         let cpu0 = thread_cpu_seconds();
         let (wall_before, cpu_before) = run.record.seconds;

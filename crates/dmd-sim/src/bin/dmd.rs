@@ -97,6 +97,8 @@ impl Reporter for Bar {
         };
         let bar = ProgressBar::new(total);
         let unit = match length {
+            // HMC phases count segments (issue 9).
+            Stop::Events(_) if name.starts_with("hmc") => "segments",
             Stop::Events(_) => "events",
             Stop::Time(_) => "‰ of the time",
         };
