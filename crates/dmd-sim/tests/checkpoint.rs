@@ -375,3 +375,107 @@ fn the_command_resumes_a_halted_run() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("`5d` is not an interval"));
     let _ = std::fs::remove_dir_all(d);
 }
+
+/// The test, at the level of the loop: 2N events straight, or N events, a checkpoint
+/// (through the file encoding), a fresh simulation built from it, and N more events: the same
+/// bits in every body's position, clock, velocity and generation, and in the time.
+#[test]
+fn two_n_events_straight_or_n_plus_checkpoint_plus_n_give_the_same_bits() {
+    use collide::Particle;
+    use dmd_sim::model::Stepped;
+    use dmd_sim::potential::Potentials;
+    use dmd_sim::simulation::{LoopSettings, NoSampler, Simulation, Stop};
+    use event_queue::{BoundedQueue, LazyQueue, Ticket};
+    use glam::DVec3;
+    type Sim = Simulation<Stepped, LazyQueue<BoundedQueue<Ticket>>>;
+
+    let pots = || {
+        Potentials::from_tables(
+            1,
+            &[((0, 0), vec![[1.0, f64::INFINITY], [1.2, 0.5], [1.5, -1.0]])],
+        )
+    };
+    let model = || Stepped::new(pots(), vec![Particle::new(1.0).unwrap()], 125);
+    let mut pos = Vec::new();
+    for x in 0..5 {
+        for y in 0..5 {
+            for z in 0..5 {
+                pos.push(DVec3::new(f64::from(x), f64::from(y), f64::from(z)) * 1.5 + 0.3);
+            }
+        }
+    }
+    let vel = dmd_sim::init::maxwell_boltzmann(&[1.0; 125], 2.0, 4);
+    let settings = LoopSettings {
+        rebase_events: 997,
+        seed: 3,
+        debug_check_events: 500,
+        skin: 0.2,
+        start_time: 0.0,
+    };
+    let n = 20_000;
+    let new = || -> Sim {
+        Simulation::new(DVec3::splat(7.5), &pos, &vel, &[0; 125], model(), settings).unwrap()
+    };
+    let mut straight = new();
+    straight
+        .run(Stop::Events(2 * n), &mut NoSampler, &mut |_| {})
+        .unwrap();
+
+    // N events (to the first re-basing after them), then a checkpoint through its bytes.
+    let mut first = new();
+    first.set_pause_at_rebase(true);
+    let mut left = 2 * n;
+    loop {
+        let before = first.counters().events;
+        first
+            .run(Stop::Events(left), &mut NoSampler, &mut |_| {})
+            .unwrap();
+        assert!(first.take_paused());
+        left -= first.counters().events - before;
+        if first.counters().events >= n {
+            break;
+        }
+    }
+    let c = checkpoint::Checkpoint {
+        source: SceneSource {
+            text: String::new(),
+            overrides: Vec::new(),
+            base: PathBuf::new(),
+            file: PathBuf::new(),
+        },
+        every: None,
+        stage: checkpoint::Stage::Production(checkpoint::Left::Events(left)),
+        sim: first.save_state(),
+        record: checkpoint::RunRecord::default(),
+        observers: checkpoint::ObserverState::default(),
+        chain: None,
+    };
+    drop(first);
+    let bytes = checkpoint::encode_with_version(&c, CODE_VERSION);
+    let c = checkpoint::decode(&bytes).unwrap();
+    let mut resumed = Sim::from_state(model(), &c.sim).unwrap();
+    resumed
+        .run(Stop::Events(left), &mut NoSampler, &mut |_| {})
+        .unwrap();
+
+    assert_eq!(resumed.counters(), straight.counters());
+    assert_eq!(resumed.time().to_bits(), straight.time().to_bits());
+    assert_eq!(resumed.now().to_bits(), straight.now().to_bits());
+    for (a, b) in resumed.bodies().iter().zip(straight.bodies()) {
+        assert_eq!(a, b, "a body differs");
+        assert_eq!(
+            a.r.to_array().map(f64::to_bits),
+            b.r.to_array().map(f64::to_bits)
+        );
+        assert_eq!(
+            a.v.to_array().map(f64::to_bits),
+            b.v.to_array().map(f64::to_bits)
+        );
+    }
+    assert_eq!(resumed.images(), straight.images());
+    assert_eq!(
+        resumed.tracked_potential().to_bits(),
+        straight.tracked_potential().to_bits()
+    );
+    assert!(straight.counters().step_in > 100, "the steps took part");
+}
