@@ -176,6 +176,25 @@ fn print_summary(s: &Summary, out: &std::path::Path) {
     if let Some(d) = s.diffusion_vacf {
         println!("  diffusion (VACF) {d:.6}");
     }
+    if let Some(h) = &s.hmc {
+        println!(
+            "  hmc           {} τ = {}, {} segments, acceptance {:.4} (rejected: overlap {}, energy {}, non-finite {}), segments with a miss {}",
+            h.ensemble,
+            h.segment_time,
+            h.segments,
+            h.acceptance_rate,
+            h.rejected_by_cause.get("overlap").copied().unwrap_or(0),
+            h.rejected_by_cause.get("energy").copied().unwrap_or(0),
+            h.rejected_by_cause.get("non_finite").copied().unwrap_or(0),
+            h.segments_with_misses
+        );
+        println!(
+            "  chain U/N     {:.6} ± {:.6} (block averages), <exp(-βΔH)> {:.6}",
+            h.potential_energy_per_body.mean,
+            h.potential_energy_per_body.error,
+            h.exp_minus_beta_delta_h
+        );
+    }
     println!(
         "  wrote {}/summary.json{}",
         out.display(),
