@@ -579,30 +579,6 @@ where
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn stored_levels_are_kept_only_within_round_off_of_their_boundary() {
-        // Hard core 1, shoulder to 1.2, well to 1.5: levels 0 (out), 1 (1.2–1.5), 2 (1–1.2),
-        // 3 (core).
-        let pot = StepPotential::new(&[[1.0, f64::INFINITY], [1.2, 0.5], [1.5, -1.0]]);
-        assert_eq!(true_level(&pot, 1, 1.3), 1);
-        // Just outside 1.5 after an inward crossing executed there: still level 1.
-        assert_eq!(true_level(&pot, 1, 1.5 * (1.0 + 1e-12)), 1);
-        // Clearly outside: the distance wins (a missed outward step).
-        assert_eq!(true_level(&pot, 1, 1.6), 0);
-        // Two levels away is never round-off.
-        assert_eq!(true_level(&pot, 0, 1.1), 2);
-        // At contact by round-off: not an overlap.
-        assert_eq!(true_level(&pot, 2, 1.0 - 1e-13), 2);
-        // Inside the core by more: the core level (+∞ energy).
-        assert_eq!(true_level(&pot, 2, 0.99), 3);
-        assert_eq!(pot.levels()[3].energy, f64::INFINITY);
-    }
-}
-
 /// Checks that a saved state fits a simulation of `n` bodies with `model` (never a panic on a
 /// damaged or foreign checkpoint).
 fn check_fits<M: PairModel>(
@@ -696,4 +672,28 @@ fn check_fits<M: PairModel>(
         return bad("a cell index is out of range".into());
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn stored_levels_are_kept_only_within_round_off_of_their_boundary() {
+        // Hard core 1, shoulder to 1.2, well to 1.5: levels 0 (out), 1 (1.2–1.5), 2 (1–1.2),
+        // 3 (core).
+        let pot = StepPotential::new(&[[1.0, f64::INFINITY], [1.2, 0.5], [1.5, -1.0]]);
+        assert_eq!(true_level(&pot, 1, 1.3), 1);
+        // Just outside 1.5 after an inward crossing executed there: still level 1.
+        assert_eq!(true_level(&pot, 1, 1.5 * (1.0 + 1e-12)), 1);
+        // Clearly outside: the distance wins (a missed outward step).
+        assert_eq!(true_level(&pot, 1, 1.6), 0);
+        // Two levels away is never round-off.
+        assert_eq!(true_level(&pot, 0, 1.1), 2);
+        // At contact by round-off: not an overlap.
+        assert_eq!(true_level(&pot, 2, 1.0 - 1e-13), 2);
+        // Inside the core by more: the core level (+∞ energy).
+        assert_eq!(true_level(&pot, 2, 0.99), 3);
+        assert_eq!(pot.levels()[3].energy, f64::INFINITY);
+    }
 }
