@@ -13,6 +13,11 @@
 //! mean over chains, its standard error from the scatter between chains (independent runs, so
 //! the plain `s/√C`, with `C ≥ 2`), and, for the HMC chain averages, the block-average error
 //! of each chain combined over chains (`√Σσ_c² / C`): two estimates that must agree.
+//!
+//! `DIR/ensemble-source.json` records the scene (text, overrides) and the checkpoint interval,
+//! so that [`resume_ensemble`] (`dmd resume DIR`) can finish an interrupted ensemble: finished
+//! jobs (those with a `summary.json`) are read back, interrupted ones resumed from their
+//! checkpoint, jobs never started are run; the aggregate is the one an uninterrupted run gives.
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -20,7 +25,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::checkpoint::{Every, SceneSource};
+use crate::checkpoint::{self, Every, SceneSource};
 use crate::output::{OutputError, write_atomically, write_csv};
 use crate::run::{Quiet, RunError, RunOptions, Summary, run_scene_with};
 use crate::scene::{Scene, SceneError};
@@ -154,19 +159,15 @@ fn field(v: &serde_json::Value, path: &str) -> Option<f64> {
         .and_then(serde_json::Value::as_f64)
 }
 
-/// Aggregates the summaries of `jobs` (in job order).
-pub fn aggregate(scene: &Scene, jobs: &[Job], summaries: &[Summary]) -> Ensemble {
+/// Aggregates the summaries of `jobs` (in job order, as `summary.json` values).
+pub fn aggregate(scene: &Scene, jobs: &[Job], values: &[serde_json::Value]) -> Ensemble {
     let points = scene.sweep.as_ref().map_or(1, |s| s.values.len());
     let chains = scene.chains.as_ref().map_or(1, |c| c.count as usize);
-    let values: Vec<serde_json::Value> = summaries
-        .iter()
-        .map(|s| serde_json::to_value(s).expect("a summary serialises"))
-        .collect();
     let mut out = Vec::with_capacity(points);
     for p in 0..points {
         let of_point: Vec<&serde_json::Value> = jobs
             .iter()
-            .zip(&values)
+            .zip(values)
             .filter(|(j, _)| j.point == p)
             .map(|(_, v)| v)
             .collect();
@@ -227,7 +228,94 @@ pub fn run_ensemble(
     every: Option<Every>,
     done: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Ensemble, RunError> {
+    run_jobs(scene, source, out, threads, every, false, false, done)
+}
+
+/// [`run_ensemble`] with every job stopped right after its first checkpoint, as a crash would
+/// leave them (tests of [`resume_ensemble`]); returns the first job's [`RunError::Halted`].
+///
+/// # Errors
+/// As [`run_ensemble`].
+pub fn run_ensemble_halting(
+    scene: &Scene,
+    source: &SceneSource,
+    out: &Path,
+    threads: Option<usize>,
+    every: Every,
+) -> Result<Ensemble, RunError> {
+    run_jobs(
+        scene,
+        source,
+        out,
+        threads,
+        Some(every),
+        false,
+        true,
+        &|_, _| {},
+    )
+}
+
+/// What `ensemble-source.json` holds.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+struct EnsembleSource {
+    source: SceneSource,
+    every: Option<Every>,
+}
+
+/// The file recording an ensemble's scene in its folder.
+pub const SOURCE_FILE: &str = "ensemble-source.json";
+
+/// Finishes the ensemble in `out` (see the module documentation).
+///
+/// # Errors
+/// [`RunError`]: a missing or unreadable `ensemble-source.json`, its scene, a job's failure.
+pub fn resume_ensemble(
+    out: &Path,
+    threads: Option<usize>,
+    done: &(dyn Fn(usize, usize) + Sync),
+) -> Result<Ensemble, RunError> {
+    let path = out.join(SOURCE_FILE);
+    let bad = |m: String| -> RunError {
+        checkpoint::CheckpointError {
+            path: path.clone(),
+            problem: checkpoint::Problem::Inconsistent(m),
+        }
+        .into()
+    };
+    let text = std::fs::read_to_string(&path).map_err(|e| bad(format!("cannot read it: {e}")))?;
+    let e: EnsembleSource =
+        serde_json::from_str(&text).map_err(|e| bad(format!("not an ensemble record: {e}")))?;
+    let scene = Scene::from_str_with(&e.source.text, &e.source.overrides)
+        .map_err(|x| bad(format!("its scene no longer reads: {x}")))?;
+    run_jobs(&scene, &e.source, out, threads, e.every, true, false, done)
+}
+
+/// Runs (or, with `resume`, finishes) every job; `halt` stops each after its first
+/// checkpoint (tests).
+#[allow(clippy::too_many_arguments)]
+fn run_jobs(
+    scene: &Scene,
+    source: &SceneSource,
+    out: &Path,
+    threads: Option<usize>,
+    every: Option<Every>,
+    resume: bool,
+    halt: bool,
+    done: &(dyn Fn(usize, usize) + Sync),
+) -> Result<Ensemble, RunError> {
     let jobs = jobs(scene, &source.text, &source.overrides)?;
+    if !resume {
+        std::fs::create_dir_all(out).map_err(|e| OutputError {
+            path: out.to_owned(),
+            message: e.to_string(),
+        })?;
+        let record = EnsembleSource {
+            source: source.clone(),
+            every,
+        };
+        let json = serde_json::to_string_pretty(&record).expect("a record serialises");
+        write_atomically(&out.join(SOURCE_FILE), json.as_bytes())?;
+    }
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads.unwrap_or(0))
         .build()
@@ -237,25 +325,10 @@ pub fn run_ensemble(
         })?;
     let finished = AtomicUsize::new(0);
     let total = jobs.len();
-    let results: Vec<Result<Summary, RunError>> = pool.install(|| {
+    let results: Vec<Result<serde_json::Value, RunError>> = pool.install(|| {
         jobs.par_iter()
             .map(|j| {
-                let options = RunOptions {
-                    checkpoint_every: every,
-                    source: Some(SceneSource {
-                        overrides: j.overrides.clone(),
-                        ..source.clone()
-                    }),
-                    resume: None,
-                    halt_after_checkpoint: false,
-                };
-                let r = run_scene_with(
-                    &j.scene,
-                    &source.base,
-                    Some(&out.join(&j.dir)),
-                    &mut Quiet,
-                    &options,
-                );
+                let r = run_job(j, source, out, every, resume, halt);
                 done(finished.fetch_add(1, Ordering::Relaxed) + 1, total);
                 r
             })
@@ -278,6 +351,50 @@ pub fn run_ensemble(
     write_atomically(&out.join("ensemble.json"), json.as_bytes())?;
     write_table(&out.join("ensemble.csv"), &ensemble)?;
     Ok(ensemble)
+}
+
+/// One job: with `resume`, a finished job's `summary.json` is read back and an interrupted
+/// one continued from its checkpoint.
+fn run_job(
+    j: &Job,
+    source: &SceneSource,
+    out: &Path,
+    every: Option<Every>,
+    resume: bool,
+    halt: bool,
+) -> Result<serde_json::Value, RunError> {
+    let dir = out.join(&j.dir);
+    let summary = dir.join("summary.json");
+    let checkpoint_file = dir.join(checkpoint::FILE_NAME);
+    let json = |s: Summary| serde_json::to_value(s).expect("a summary serialises");
+    if resume && summary.exists() {
+        let text = std::fs::read_to_string(&summary).map_err(|e| OutputError {
+            path: summary.clone(),
+            message: e.to_string(),
+        })?;
+        return serde_json::from_str(&text).map_err(|e| {
+            OutputError {
+                path: summary.clone(),
+                message: format!("not a summary: {e}"),
+            }
+            .into()
+        });
+    }
+    let mut options = RunOptions {
+        checkpoint_every: every,
+        source: Some(SceneSource {
+            overrides: j.overrides.clone(),
+            ..source.clone()
+        }),
+        resume: None,
+        halt_after_checkpoint: halt,
+    };
+    if resume && checkpoint_file.exists() {
+        let c = checkpoint::read(&checkpoint_file)?;
+        options.source = None;
+        options.resume = Some((checkpoint_file, c));
+    }
+    run_scene_with(&j.scene, &source.base, Some(&dir), &mut Quiet, &options).map(json)
 }
 
 /// `ensemble.csv`: per point the swept value (its index if not a number) and the mean and

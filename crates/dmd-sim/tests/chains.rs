@@ -110,3 +110,43 @@ fn results_do_not_depend_on_the_thread_count() {
     let _ = std::fs::remove_dir_all(one);
     let _ = std::fs::remove_dir_all(two);
 }
+
+#[test]
+fn an_interrupted_ensemble_is_finished_by_resume() {
+    use dmd_sim::checkpoint::Every;
+    use dmd_sim::run::RunError;
+    let scene = Scene::from_str_with(SCENE, &["hmc.segments=60".into()]).unwrap();
+    let src = SceneSource {
+        overrides: vec!["hmc.segments=60".into()],
+        ..source()
+    };
+    let straight = dir("straight");
+    let a = run_ensemble(&scene, &src, &straight, Some(2), None, &|_, _| {}).unwrap();
+    let crashed = dir("crashed");
+    let e =
+        dmd_sim::chains::run_ensemble_halting(&scene, &src, &crashed, Some(2), Every::Events(3000))
+            .unwrap_err();
+    assert!(
+        matches!(&e, RunError::Job { source, .. } if matches!(**source, RunError::Halted)),
+        "{e}"
+    );
+    // One job finished before the crash (its summary is read back), one never started.
+    std::fs::remove_dir_all(crashed.join("point-1/chain-3")).unwrap();
+    std::fs::copy(
+        straight.join("point-0/chain-0/summary.json"),
+        crashed.join("point-0/chain-0/summary.json"),
+    )
+    .unwrap();
+    let b = dmd_sim::chains::resume_ensemble(&crashed, Some(1), &|_, _| {}).unwrap();
+    assert_eq!(a, b);
+    let hmc = |d: &std::path::Path| -> serde_json::Value {
+        serde_json::from_slice::<serde_json::Value>(
+            &std::fs::read(d.join("point-1/chain-2/summary.json")).unwrap(),
+        )
+        .unwrap()["hmc"]
+            .clone()
+    };
+    assert_eq!(hmc(&straight), hmc(&crashed));
+    let _ = std::fs::remove_dir_all(straight);
+    let _ = std::fs::remove_dir_all(crashed);
+}

@@ -55,9 +55,10 @@ enum Command {
         #[arg(long, hide = true)]
         halt_after_checkpoint: bool,
     },
-    /// Continue a run from its checkpoint (written by `dmd run --checkpoint-every`).
+    /// Continue a run from its checkpoint (written by `dmd run --checkpoint-every`), or finish
+    /// the chains or sweep whose output folder is given.
     Resume {
-        /// The checkpoint file.
+        /// The checkpoint file, or the output folder of a scene with `[chains]` or `[sweep]`.
         checkpoint: PathBuf,
         /// Output folder (default: the checkpoint's folder).
         #[arg(long, short)]
@@ -68,6 +69,9 @@ enum Command {
         /// Change the checkpoint interval (default: the saved one).
         #[arg(long, value_name = "EVENTS|TIME")]
         checkpoint_every: Option<String>,
+        /// Threads for the jobs of chains or a sweep (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
     },
     /// Read and check a scene (with overrides) without running it.
     Check {
@@ -288,7 +292,14 @@ fn main() -> ExitCode {
             out,
             quiet,
             checkpoint_every,
-        } => resume(checkpoint, out, quiet, checkpoint_every),
+            threads,
+        } => {
+            if checkpoint.is_dir() {
+                resume_ensemble(&checkpoint, threads, quiet)
+            } else {
+                resume(checkpoint, out, quiet, checkpoint_every)
+            }
+        }
     }
 }
 
@@ -360,6 +371,31 @@ fn resume(path: PathBuf, out: Option<PathBuf>, quiet: bool, every: Option<String
         }
         Err(e) => {
             eprintln!("dmd: {}: {e}", path.display());
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// `dmd resume DIR` of chains or a sweep.
+fn resume_ensemble(dir: &std::path::Path, threads: Option<usize>, quiet: bool) -> ExitCode {
+    let done = |k: usize, n: usize| {
+        if !quiet {
+            eprintln!("dmd: {k} of {n} jobs done");
+        }
+    };
+    match dmd_sim::chains::resume_ensemble(dir, threads, &done) {
+        Ok(e) => {
+            if !quiet {
+                print_ensemble(&e, dir);
+            }
+            ExitCode::SUCCESS
+        }
+        Err(e @ dmd_sim::run::RunError::Checkpoint(_)) => {
+            eprintln!("dmd: {e}");
+            ExitCode::from(2)
+        }
+        Err(e) => {
+            eprintln!("dmd: {}: {e}", dir.display());
             ExitCode::FAILURE
         }
     }
