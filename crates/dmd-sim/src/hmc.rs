@@ -664,6 +664,18 @@ impl<M: PairModel> PairModel for Faulty<M> {
         self.inner.clear_levels();
     }
 
+    fn configured_level(
+        &self,
+        i: u32,
+        j: u32,
+        si: u32,
+        sj: u32,
+        dr: DVec3,
+        stored: u16,
+    ) -> (u16, f64) {
+        self.inner.configured_level(i, j, si, sj, dr, stored)
+    }
+
     fn rotational_kinetic(&self) -> f64 {
         self.inner.rotational_kinetic()
     }

@@ -112,6 +112,26 @@ pub trait PairModel {
     /// sets the levels a configuration's distances give, after a segment with missed events.
     fn clear_levels(&mut self) {}
 
+    /// The level and energy of pair `(i, j)` (species `si`, `sj`, separation `dr = r_i − r_j`
+    /// now) judged from its configuration, not from its events: the stored level `stored` if
+    /// the configuration is on it or within round-off of its boundary, else the level the
+    /// configuration gives (`+∞` energy inside a hard core). The `U` of HMC's `ΔH`. The
+    /// default reads the radial step potential of the species pair (spheres); a rigid model
+    /// evaluates its terrace from the attitudes at the present time.
+    fn configured_level(
+        &self,
+        _i: u32,
+        _j: u32,
+        si: u32,
+        sj: u32,
+        dr: DVec3,
+        stored: u16,
+    ) -> (u16, f64) {
+        let pot = self.potentials().get(si, sj);
+        let level = crate::simulation::true_level(pot, stored as usize, dr.length());
+        (level as u16, pot.levels()[level].energy)
+    }
+
     /// Rotational kinetic energy of all bodies (part of the HMC Hamiltonian; 0 for spheres).
     fn rotational_kinetic(&self) -> f64 {
         0.0

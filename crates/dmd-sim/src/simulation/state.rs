@@ -508,11 +508,10 @@ where
     pub fn true_energy(&self) -> TrueEnergy {
         let mut u = Compensated::ZERO;
         let (mut overlaps, mut mismatched) = (0, 0);
-        self.for_each_interacting_pair(|_, _, stored, level, pot| {
+        self.for_each_interacting_pair(|_, _, stored, level, e| {
             if level != stored {
                 mismatched += 1;
             }
-            let e = pot.levels()[level].energy;
             if e == f64::INFINITY {
                 overlaps += 1;
             } else if e != 0.0 {
@@ -536,13 +535,12 @@ where
     /// events were missed. The tracked potential energy is recomputed.
     pub(crate) fn repair_levels(&mut self) {
         let mut found = Vec::new();
-        self.for_each_interacting_pair(|i, j, _, level, pot| {
+        self.for_each_interacting_pair(|i, j, _, level, e| {
             // A pair left inside a hard core (only when every segment is accepted, a validation
             // comparison) is put at contact: the loop then reflects it, counting an overlap.
-            let top = pot.levels().len() - 1 - usize::from(pot.core().is_some());
-            let level = level.min(top);
+            let level = if e == f64::INFINITY { level - 1 } else { level };
             if level > 0 {
-                found.push((i, j, level as u16));
+                found.push((i, j, level));
             }
         });
         self.model.clear_levels();
@@ -553,9 +551,11 @@ where
         self.potential = self.potential_energy();
     }
 
-    /// Calls `f(i, j, stored level, true level, potential)` for every listed pair `i < j`
-    /// closer than its potential's reach.
-    fn for_each_interacting_pair(&self, mut f: impl FnMut(u32, u32, usize, usize, &StepPotential)) {
+    /// Calls `f(i, j, stored level, level, energy)` for every listed pair `i < j` that is
+    /// stored off level 0 or closer than the reach, with the level and energy its configuration
+    /// gives ([`PairModel::configured_level`]).
+    fn for_each_interacting_pair(&self, mut f: impl FnMut(u32, u32, u16, u16, f64)) {
+        let reach = self.model.reach();
         let now = self.now;
         for i in 0..self.bodies.len() as u32 {
             let bi = &self.bodies[i as usize];
@@ -566,14 +566,15 @@ where
                     continue;
                 }
                 let bj = &self.bodies[j as usize];
-                let d = ((ri - self.shifts[neighbour::code(e) as usize]) - bj.position_at(now))
-                    .length();
-                let pot = self.model.potentials().get(bi.species, bj.species);
-                let stored = self.model.level(i, j) as usize;
-                if d >= pot.reach() && stored == 0 {
+                let dr = (ri - self.shifts[neighbour::code(e) as usize]) - bj.position_at(now);
+                let stored = self.model.level(i, j);
+                if stored == 0 && dr.length_squared() >= reach * reach {
                     continue;
                 }
-                f(i, j, stored, true_level(pot, stored, d), pot);
+                let (level, energy) = self
+                    .model
+                    .configured_level(i, j, bi.species, bj.species, dr, stored);
+                f(i, j, stored, level, energy);
             }
         }
     }
