@@ -459,6 +459,8 @@ where
     pub(crate) fn move_origin_here(&mut self) {
         self.flush_integrals();
         let t0 = self.now;
+        // Merge note (issue 7): bring the model's per-body state (attitudes) along, as
+        // `rebase` does once it calls the model's `sync` hook.
         for b in &mut self.bodies {
             b.sync(t0);
             b.t = 0.0;
@@ -479,6 +481,9 @@ where
     pub(crate) fn refresh_momenta(&mut self, refresh: impl FnOnce(&mut [Body], &[f64], &mut M)) {
         self.flush_integrals();
         let now = self.now;
+        // Merge note (issue 7): the model's `sync` hook belongs here too (a no-op at a
+        // re-basing, where every clock is already `now`), and its `changed` hook after the
+        // refresh, for every body.
         for b in &mut self.bodies {
             b.sync(now);
         }
