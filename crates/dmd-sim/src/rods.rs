@@ -2,8 +2,7 @@
 //! rods (003 Eq. 7), and the search settings and initial rotation of the rods.
 //!
 //! Lennard-Jones spheres on terraces need no root search: their terraces are radial steps with
-//! analytic event times ([`radial_steps`](crate::terraced::radial_steps)), so they run on the
-//! stepped path. Only potentials that depend on orientations (the rods of 003 Eqs. 22–23 with
+//! analytic event times ([`radial_steps`]), so they run on the stepped path. Only potentials that depend on orientations (the rods of 003 Eqs. 22–23 with
 //! `ζ > 0`, Gay–Berne) build a [`Terraced`](crate::terraced::Terraced) model.
 
 use glam::DVec3;
@@ -23,6 +22,9 @@ use crate::scene::{
 use crate::terraced::{
     PairTable, PairTerraces, RodSpecies, SearchMethod, SearchSettings, draw_omega, radial_steps,
 };
+
+/// A radial profile given by a plain function (none for anisotropic potentials).
+type RadialProfile = Profile<fn(f64) -> f64>;
 
 /// The interaction model a scene asks for, built (scene in internal units).
 pub enum Plan {
@@ -109,7 +111,7 @@ impl Plan {
                     let gb = GayBerne::new(sigma0, epsilon0, kappa, kappa_prime, mu, nu)
                         .map_err(|e| potential_error(k, e))?;
                     let t = p.terraces.as_ref().expect("checked");
-                    let none: Option<&Profile<fn(f64) -> f64>> = None;
+                    let none: Option<&RadialProfile> = None;
                     let map = terrace_map(k, &gb, none, t, kt, scale)?;
                     let terraces = PairTerraces::new(gb, map).map_err(|e| {
                         SceneError::invalid(format!("pair[{k}].terraces"), e.to_string())

@@ -1368,7 +1368,7 @@ impl Scene {
                 positive("search.max_step", x)?;
             }
             if let Some(x) = sr.window
-                && !(x > 0.0)
+                && (x.is_nan() || x <= 0.0)
             {
                 return Err(SceneError::invalid(
                     "search.window",
@@ -1390,7 +1390,7 @@ impl Scene {
                         "only used with `method = \"grid\"`",
                     ));
                 }
-                if !(x >= 0.0) {
+                if x.is_nan() || x < 0.0 {
                     return Err(SceneError::invalid(
                         "search.grid_threshold",
                         format!("must be an energy ≥ 0 or inf, got {x}"),
@@ -1401,7 +1401,7 @@ impl Scene {
                 positive("search.verify_step", x)?;
             }
             if let Some(x) = sr.max_change {
-                if !(x > 0.0) {
+                if x.is_nan() || x <= 0.0 {
                     return Err(SceneError::invalid(
                         "search.max_change",
                         format!("must be a positive fraction or inf, got {x}"),

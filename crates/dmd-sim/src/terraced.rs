@@ -461,14 +461,14 @@ impl<P: PairPotential> Terraced<P> {
             });
         }
         assert_eq!(body_species.len(), rods.len(), "one species per body");
-        if !(settings.window > 0.0) {
+        if settings.window.is_nan() || settings.window <= 0.0 {
             return Err(ModelError::Search(SearchError::BadSetting {
                 name: "window",
                 value: settings.window,
                 why: "> 0",
             }));
         }
-        if !(settings.max_change > 0.0) {
+        if settings.max_change.is_nan() || settings.max_change <= 0.0 {
             return Err(ModelError::Search(SearchError::BadSetting {
                 name: "max_change",
                 value: settings.max_change,
@@ -861,7 +861,8 @@ impl<P: PairPotential> PairModel for Terraced<P> {
         // round-off; anything more is an event that was not where it was predicted.
         let root_tol = 1e-10 * self.settings.max_step;
         let tol = 1e-9 * (level.abs() + band.width()) + 8.0 * udot.abs() * root_tol;
-        if !((e.energy - level).abs() <= tol) {
+        let off = (e.energy - level).abs();
+        if off.partial_cmp(&tol).is_none_or(std::cmp::Ordering::is_gt) {
             self.stats.misfits += 1;
         }
         if !right_way {
@@ -1143,7 +1144,7 @@ impl<P: PairPotential> PairModel for Terraced<P> {
         }
         let mut c = [0u64; STATS_NUMBERS / 2];
         for (k, h) in counts.chunks_exact(2).enumerate() {
-            let ok = |v: f64| v >= 0.0 && v < 4_294_967_296.0 && v.fract() == 0.0;
+            let ok = |v: f64| (0.0..4_294_967_296.0).contains(&v) && v.fract() == 0.0;
             if !(ok(h[0]) && ok(h[1])) {
                 return Err(format!("search counter {k} is not a count"));
             }
