@@ -80,6 +80,14 @@ pub(crate) const CHECKS: &[Check] = &[
         quick: &["--quick"],
     },
     Check {
+        name: "hmc",
+        title: "Hybrid Monte Carlo: exact canonical answers with deliberate misses, acceptance against segment length, stiff systems, checkpoints, chains",
+        package: "dmd-sim",
+        example: "validate_hmc",
+        full: &[],
+        quick: &["--quick"],
+    },
+    Check {
         name: "collide",
         title: "Impulse rules: conservation, constraints, reversibility and cross-check statistics",
         package: "dmd-collide",

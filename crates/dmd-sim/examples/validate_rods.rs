@@ -280,7 +280,7 @@ fn rates(args: &Args, r: &mut Report, w: &mut String) -> Result<(), String> {
     } else {
         &[0.5, 1.0, 1.5, 2.0]
     };
-    let (time, eq) = if q { ("0.5", "1") } else { ("10", "10") };
+    let (time, eq) = if q { ("0.5", "3") } else { ("10", "10") };
     for &dv in steps {
         let sum = run(
             PAPER,

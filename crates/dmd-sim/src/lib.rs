@@ -44,7 +44,10 @@
 
 pub mod body;
 pub mod cell;
+pub mod chains;
+pub mod checkpoint;
 pub mod event;
+pub mod hmc;
 pub mod init;
 pub mod model;
 pub mod neighbour;

@@ -187,7 +187,48 @@ pub trait PairModel {
     #[inline(always)]
     fn rebase(&mut self, _t0: f64) {}
 
-    /// Rotational kinetic energy of all bodies (0 for spheres).
+    // ----- Hybrid Monte Carlo and checkpoints (issue 9) ---------------------------------------
+    // The stored pair levels are opaque numbers to the loop (0: not stored); only the model
+    // knows what they mean. Hooks of the per-body state have defaults that do nothing, right
+    // for spheres (no state beyond the `Body` record and the pair levels); the rigid model
+    // keeps attitudes and angular velocities in its own arrays and implements them (see
+    // docs/ARCHITECTURE.md, "Hybrid Monte Carlo").
+
+    /// The stored level of pair `(i, j)` (0 when nothing is stored).
+    fn level(&self, i: u32, j: u32) -> u16;
+
+    /// Stores a level for pair `(i, j)` (a saved state, or HMC's repair of levels).
+    fn set_level(&mut self, i: u32, j: u32, level: u16);
+
+    /// Forgets every stored pair level (every pair back on level 0). HMC calls it before it
+    /// sets the levels a configuration gives, after a segment with missed events.
+    #[inline(always)]
+    fn clear_levels(&mut self) {}
+
+    /// Whether `level` is a level a pair of species `(si, sj)` can be stored on outside a hard
+    /// core (checks of a saved state).
+    fn storable_level(&self, si: u32, sj: u32, level: u16) -> bool;
+
+    /// The level and energy of pair `(i, j)` (species `si`, `sj`, separation `dr = r_i − r_j`
+    /// at time `now`) judged from its configuration, not from its events: the stored level
+    /// `stored` if the configuration is on it or within round-off of its boundary, else the
+    /// level the configuration gives. Inside a hard core the energy is `+∞` and the level the
+    /// one just outside the core (where HMC's repair puts such a pair, at contact). The `U`
+    /// of HMC's `ΔH`. Spheres read the radial step potential of the species pair; the rigid
+    /// model evaluates its terrace from the attitudes at `now`.
+    #[allow(clippy::too_many_arguments)]
+    fn configured_level(
+        &self,
+        i: u32,
+        j: u32,
+        si: u32,
+        sj: u32,
+        now: f64,
+        dr: DVec3,
+        stored: u16,
+    ) -> (u16, f64);
+
+    /// Rotational kinetic energy of all bodies (0 for spheres; part of the HMC Hamiltonian).
     #[inline(always)]
     fn rotational_kinetic(&self) -> f64 {
         0.0
@@ -234,6 +275,54 @@ pub trait PairModel {
     /// Counters of the model's own work (root searches), if it has any.
     fn search_stats(&self) -> Option<crate::terraced::SearchStats> {
         None
+    }
+
+    /// Draws every body's angular velocity from its Gaussian (Maxwell–Boltzmann) distribution
+    /// at `temperature` (the canonical HMC refresh, 000 §V), every body at time `now`. The loop
+    /// re-predicts every event afterwards.
+    #[inline(always)]
+    fn draw_rotations(
+        &mut self,
+        _now: f64,
+        _temperature: f64,
+        _rng: &mut rand_xoshiro::Xoshiro256PlusPlus,
+    ) {
+    }
+
+    /// Reverses every angular velocity (an HMC rejection reverses the momenta), every body at
+    /// a re-basing of the time origin.
+    #[inline(always)]
+    fn reverse_rotations(&mut self) {}
+
+    /// HMC begins segment number `segment` (the fault-injection wrapper of `hmc` re-draws
+    /// which pairs it hides; models do nothing).
+    #[inline(always)]
+    fn begin_segment(&mut self, _segment: u64) {}
+
+    /// The model's state beyond the `Body` record and the pair levels (attitudes, angular
+    /// velocities, counters), as numbers, at a re-basing of the time origin: HMC snapshots
+    /// and checkpoints. Empty for spheres. What the model's predictions add (saved searches)
+    /// is not part of it: the loop rebuilds every prediction from the state.
+    fn extra_state(&self) -> Vec<f64> {
+        Vec::new()
+    }
+
+    /// Restores what [`extra_state`](Self::extra_state) returned. The loop calls it before it
+    /// rebuilds the predictions and once more after (so that counters of the model's own work
+    /// end as they were saved, not counting the rebuilt predictions twice): it must not touch
+    /// the predictions' saved searches.
+    ///
+    /// # Errors
+    /// A description when `state` does not fit the model (a checkpoint of another scene).
+    fn set_extra_state(&mut self, state: &[f64]) -> Result<(), String> {
+        if state.is_empty() {
+            Ok(())
+        } else {
+            Err(format!(
+                "the model keeps no state beyond positions and velocities, but {} numbers were given",
+                state.len()
+            ))
+        }
     }
 }
 
@@ -417,6 +506,32 @@ impl PairModel for HardSpheres {
         listed: bool,
     ) -> Result<(), String> {
         check_stepped(self.potentials.get(si, sj), i, j, 0, dr.length(), listed)
+    }
+
+    #[inline(always)]
+    fn level(&self, _i: u32, _j: u32) -> u16 {
+        0
+    }
+
+    fn set_level(&mut self, _i: u32, _j: u32, level: u16) {
+        debug_assert_eq!(level, 0, "hard spheres have no levels but 0");
+    }
+
+    fn storable_level(&self, _si: u32, _sj: u32, _level: u16) -> bool {
+        false
+    }
+
+    fn configured_level(
+        &self,
+        _i: u32,
+        _j: u32,
+        si: u32,
+        sj: u32,
+        _now: f64,
+        dr: DVec3,
+        stored: u16,
+    ) -> (u16, f64) {
+        configured_step(self.potentials.get(si, sj), stored, dr)
     }
 }
 
@@ -633,6 +748,56 @@ impl PairModel for Stepped {
             listed,
         )
     }
+
+    #[inline]
+    fn level(&self, i: u32, j: u32) -> u16 {
+        self.states.get(i, j)
+    }
+
+    #[inline]
+    fn set_level(&mut self, i: u32, j: u32, level: u16) {
+        self.states.set(i, j, level);
+    }
+
+    fn clear_levels(&mut self) {
+        self.states = PairStates::new(self.states.n_bodies());
+    }
+
+    fn storable_level(&self, si: u32, sj: u32, level: u16) -> bool {
+        storable_step(self.potentials.get(si, sj), level)
+    }
+
+    fn configured_level(
+        &self,
+        _i: u32,
+        _j: u32,
+        si: u32,
+        sj: u32,
+        _now: f64,
+        dr: DVec3,
+        stored: u16,
+    ) -> (u16, f64) {
+        configured_step(self.potentials.get(si, sj), stored, dr)
+    }
+}
+
+/// The level and energy of a pair of a radial step potential at separation `dr` whose stored
+/// level is `stored` ([`PairModel::configured_level`]).
+fn configured_step(pot: &StepPotential, stored: u16, dr: DVec3) -> (u16, f64) {
+    let level = crate::simulation::true_level(pot, stored as usize, dr.length());
+    let energy = pot.levels()[level].energy;
+    if energy == f64::INFINITY {
+        // Inside the hard core: the level at contact (the core is the last level).
+        (level.saturating_sub(1) as u16, energy)
+    } else {
+        (level as u16, energy)
+    }
+}
+
+/// Whether a pair of `pot` can be stored on `level` outside its hard core.
+fn storable_step(pot: &StepPotential, level: u16) -> bool {
+    let top = pot.levels().len() - usize::from(pot.core().is_some());
+    level > 0 && (level as usize) < top
 }
 
 impl Stepped {

@@ -10,7 +10,7 @@ use glam::DVec3;
 use crate::simulation::{Sampler, View};
 
 /// Radial distribution function `g(r)` of all pairs.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct Rdf {
     every: u64,
     seen: u64,
@@ -146,7 +146,7 @@ fn min_image(mut d: DVec3, l: DVec3) -> DVec3 {
 }
 
 /// One time origin of the correlations.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 struct Origin {
     sample: u64,
     r0: Vec<DVec3>,
@@ -157,7 +157,7 @@ struct Origin {
 /// Mean-square displacement, velocity autocorrelation and (for rods) the long-axis
 /// orientational autocorrelations `⟨s(0)·s(t)⟩` and `⟨P₂(s(0)·s(t))⟩` over sliding time
 /// origins.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct Correlations {
     dt: f64,
     lags: usize,
@@ -326,7 +326,7 @@ impl Correlations {
 }
 
 /// One row of the pressure and energy time series.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SeriesRow {
     /// Simulated time since the start of production.
     pub time: f64,
@@ -343,7 +343,7 @@ pub struct SeriesRow {
 }
 
 /// Pressure and energy time series.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct Series {
     rows: Vec<SeriesRow>,
     last: Option<(f64, f64, f64)>,

@@ -157,6 +157,10 @@ pub struct Trajectory {
     shape: [f64; 3],
 }
 
+/// Semi-axes of the ellipsoid a rod is drawn as, unless [`Trajectory::with_shape`] says
+/// otherwise.
+const ROD_SHAPE: [f64; 3] = [0.5, 0.5, 1.5];
+
 /// The unit quaternion (shortest arc) that turns `z` into `axis`.
 pub fn axis_quaternion(axis: glam::DVec3) -> glam::DQuat {
     glam::DQuat::from_rotation_arc(glam::DVec3::Z, axis.normalize())
@@ -177,7 +181,7 @@ impl Trajectory {
             names,
             error: None,
             frames: 0,
-            shape: [0.5, 0.5, 1.5],
+            shape: ROD_SHAPE,
         })
     }
 
@@ -243,6 +247,66 @@ impl Trajectory {
     /// Frames written.
     pub fn frames(&self) -> u64 {
         self.frames
+    }
+
+    /// Flushes the frames written so far and returns the length of the temporary file and the
+    /// frame count (a checkpoint records them, issue 9).
+    ///
+    /// # Errors
+    /// [`OutputError`] with the first write error of the run, if any.
+    pub fn mark(&mut self) -> Result<(u64, u64), OutputError> {
+        if let Some(e) = &self.error {
+            return Err(io_err(&self.tmp, e));
+        }
+        self.out.flush().map_err(|e| io_err(&self.tmp, e))?;
+        let len = self
+            .out
+            .get_ref()
+            .metadata()
+            .map_err(|e| io_err(&self.tmp, e))?
+            .len();
+        Ok((len, self.frames))
+    }
+
+    /// Reopens the temporary file of a trajectory interrupted after `len` bytes and `frames`
+    /// frames (a resumed run, issue 9): frames written after that point are cut off and new
+    /// ones appended.
+    ///
+    /// # Errors
+    /// [`OutputError`] if the temporary file is missing or shorter than `len`.
+    pub fn reopen(
+        path: &Path,
+        names: Vec<String>,
+        len: u64,
+        frames: u64,
+    ) -> Result<Self, OutputError> {
+        let tmp = temporary(path);
+        let f = std::fs::OpenOptions::new()
+            .write(true)
+            .open(&tmp)
+            .map_err(|e| io_err(&tmp, format!("cannot continue the trajectory: {e}")))?;
+        let have = f.metadata().map_err(|e| io_err(&tmp, e))?.len();
+        if have < len {
+            return Err(io_err(
+                &tmp,
+                format!(
+                    "cannot continue the trajectory: it has {have} bytes, the checkpoint \
+                     recorded {len}"
+                ),
+            ));
+        }
+        f.set_len(len).map_err(|e| io_err(&tmp, e))?;
+        let mut out = BufWriter::new(f);
+        std::io::Seek::seek(&mut out, std::io::SeekFrom::End(0)).map_err(|e| io_err(&tmp, e))?;
+        Ok(Trajectory {
+            path: path.to_owned(),
+            tmp,
+            out,
+            names,
+            error: None,
+            frames,
+            shape: ROD_SHAPE,
+        })
     }
 
     /// Flushes and renames the file into place.

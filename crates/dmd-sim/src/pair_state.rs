@@ -57,6 +57,11 @@ impl PairStates {
         }
     }
 
+    /// Number of bodies.
+    pub fn n_bodies(&self) -> usize {
+        self.len.len()
+    }
+
     /// Number of pairs off level 0.
     pub fn stored(&self) -> usize {
         self.stored

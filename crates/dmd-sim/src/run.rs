@@ -14,13 +14,19 @@ use event_queue::{BoundedQueue, HeapQueue, LazyQueue, Ticket, TournamentTree};
 use glam::DVec3;
 use serde::Serialize;
 
+use crate::checkpoint::{
+    Checkpoint, CheckpointError, Every, Left, ObserverState, Problem, RunRecord, Saver,
+    SceneSource, Stage,
+};
+use crate::hmc::{Acceptance, Chain, Ensemble, Faulty, HmcSettings, HmcSummary};
 use crate::init::{Configuration, lattice, maxwell_boltzmann, read_orientations, read_xyz};
 use crate::model::{HardSpheres, PairModel, Stepped};
 use crate::observable::{Correlations, Observers, Rdf, Series};
 use crate::output::{Curve, OutputError, Trajectory, plot_svg, write_atomically, write_csv};
 use crate::rods::{Plan, equipartitioned_omegas, random_axes, rod_species, search_settings};
 use crate::scene::{
-    Orientations, Positions, QueueKind, Scene, SceneError, ThermostatKind, ThermostatPhase,
+    AcceptKind, EnsembleKind, Orientations, Positions, QueueKind, Scene, SceneError,
+    ThermostatKind, ThermostatPhase,
 };
 use crate::schedule::Scheduler;
 use crate::simulation::{Andersen, LoopSettings, Progress, SetupError, SimError, Simulation, Stop};
@@ -43,6 +49,34 @@ pub enum RunError {
     /// An output could not be written.
     #[error(transparent)]
     Output(#[from] OutputError),
+    /// A checkpoint cannot be resumed (issue 9).
+    #[error(transparent)]
+    Checkpoint(#[from] CheckpointError),
+    /// Stopped after a checkpoint, as [`RunOptions::halt_after_checkpoint`] asked.
+    #[error("halted after writing a checkpoint, as asked")]
+    Halted,
+    /// A job of an ensemble of chains or sweep points failed (issue 9).
+    #[error("job {job}: {source}")]
+    Job {
+        /// The job's folder.
+        job: String,
+        /// Why.
+        source: Box<RunError>,
+    },
+}
+
+/// What a run does besides the scene (issue 9): checkpoints, and resuming from one.
+#[derive(Debug, Default)]
+pub struct RunOptions {
+    /// Write `DIR/checkpoint.dmd` this often (needs `source` and an output folder).
+    pub checkpoint_every: Option<Every>,
+    /// The scene's text and overrides, stored in checkpoints.
+    pub source: Option<SceneSource>,
+    /// Continue the run saved in this checkpoint (its file, and its contents).
+    pub resume: Option<(std::path::PathBuf, Checkpoint)>,
+    /// Stop right after the first checkpoint is written, outputs unfinished, as a crash then
+    /// would (tests of `dmd resume`).
+    pub halt_after_checkpoint: bool,
 }
 
 /// Receives progress reports (the `dmd` command draws a progress bar).
@@ -172,6 +206,9 @@ pub struct Summary {
     pub seed: u64,
     /// Files written besides `summary.json`.
     pub files: Vec<String>,
+    /// Hybrid Monte Carlo statistics (issue 9; only with `[hmc]`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub hmc: Option<HmcSummary>,
 }
 
 /// Runs a scene. `base` is the folder relative paths of the scene are read from; with
@@ -184,6 +221,21 @@ pub fn run_scene(
     base: &Path,
     out: Option<&Path>,
     reporter: &mut dyn Reporter,
+) -> Result<Summary, RunError> {
+    run_scene_with(scene, base, out, reporter, &RunOptions::default())
+}
+
+/// [`run_scene`] with checkpoints, or continuing from one (`options.resume`: the scene must be
+/// the checkpoint's own).
+///
+/// # Errors
+/// [`RunError`].
+pub fn run_scene_with(
+    scene: &Scene,
+    base: &Path,
+    out: Option<&Path>,
+    reporter: &mut dyn Reporter,
+    options: &RunOptions,
 ) -> Result<Summary, RunError> {
     let units = Units::of(scene.units);
     let scene = &scene.internal();
@@ -203,9 +255,19 @@ pub fn run_scene(
     } else {
         0.0
     };
-    let config = match scene.init.positions {
-        Positions::Fcc | Positions::Sc => lattice(scene, smallest_core)?,
-        Positions::File => {
+    if let Some((path, c)) = &options.resume {
+        check_checkpoint_scene(scene, path, c)?;
+    }
+    let config = match (&options.resume, scene.init.positions) {
+        // Issue 9: a resumed run takes its configuration from the checkpoint.
+        (Some((_, c)), _) => Configuration {
+            lengths: c.sim.lengths,
+            positions: c.sim.bodies.iter().map(|b| b.r).collect(),
+            species: c.sim.bodies.iter().map(|b| b.species).collect(),
+            lattice_spacing: None,
+        },
+        (None, Positions::Fcc | Positions::Sc) => lattice(scene, smallest_core)?,
+        (None, Positions::File) => {
             let file = scene.init.file.as_ref().expect("checked");
             read_xyz(scene, &base.join(file))?
         }
@@ -218,8 +280,11 @@ pub fn run_scene(
     let velocities = maxwell_boltzmann(&masses, scene.init.temperature, scene.seed);
     let n = config.positions.len();
     let hard = matches!(&plan, Plan::Spheres(p) if p.all_hard_spheres());
-    let skin = choose_skin(scene, plan.reach(), hard, &config)?;
-    let settings = LoopSettings {
+    let skin = match &options.resume {
+        Some((_, c)) => c.sim.settings.3,
+        None => choose_skin(scene, plan.reach(), hard, &config)?,
+    };
+    let mut settings = LoopSettings {
         rebase_events: scene
             .run
             .rebase_events
@@ -235,6 +300,14 @@ pub fn run_scene(
             message: e.to_string(),
         })?;
     }
+    type Bounded = LazyQueue<BoundedQueue<Ticket>>;
+    type Heap = LazyQueue<HeapQueue<Ticket>>;
+    // Issue 9: HMC fault injection (a validation tool) wraps the general stepped model; missed
+    // events break the loop's invariants on purpose, so the debug checks are off.
+    let fault = scene.hmc.as_ref().map_or(0.0, |h| h.fault_fraction);
+    if fault > 0.0 {
+        settings.debug_check_events = 0;
+    }
     let ctx = Context {
         scene,
         config: &config,
@@ -243,9 +316,29 @@ pub fn run_scene(
         out,
         units,
         model_name: plan.name(),
+        options,
     };
-    type Bounded = LazyQueue<BoundedQueue<Ticket>>;
-    type Heap = LazyQueue<HeapQueue<Ticket>>;
+    if fault > 0.0 {
+        // Checked with the scene: fault injection is for sphere scenes.
+        let Plan::Spheres(potentials) = plan else {
+            return Err(SceneError::invalid(
+                "hmc.fault_fraction",
+                "fault injection hides pairs of the analytic sphere models; it is not available \
+                 for rods"
+                    .to_owned(),
+            )
+            .into());
+        };
+        let particles: Vec<Particle> = scene
+            .species
+            .iter()
+            .map(|s| Particle::new(s.mass).expect("masses are checked"))
+            .collect();
+        let model = Faulty::new(Stepped::new(potentials, particles, n), fault, scene.seed);
+        let mut summary = ctx.go::<_, Heap>(model, reporter)?;
+        summary.model = "stepped (fault injection)".to_owned();
+        return Ok(summary);
+    }
     match plan {
         Plan::Spheres(potentials) => {
             let particles: Vec<Particle> = scene
@@ -332,6 +425,7 @@ struct Context<'a> {
     out: Option<&'a Path>,
     units: Units,
     model_name: &'static str,
+    options: &'a RunOptions,
 }
 
 impl Context<'_> {
@@ -353,15 +447,45 @@ impl Context<'_> {
         reporter: &mut dyn Reporter,
     ) -> Result<Summary, RunError> {
         let scene = self.scene;
-        let mut sim: Simulation<M, Q> = Simulation::new(
-            self.config.lengths,
-            &self.config.positions,
-            self.velocities,
-            &self.config.species,
-            model,
-            self.settings,
-        )
-        .map_err(|e| setup_error(scene, self.config, &self.units, e))?;
+        // Issue 9: a resumed run starts from its checkpoint's state and stage.
+        let resume = self.options.resume.as_ref();
+        let mut sim: Simulation<M, Q> = match resume {
+            Some((path, c)) => {
+                Simulation::from_state(model, &c.sim).map_err(|e| CheckpointError {
+                    path: path.clone(),
+                    problem: Problem::Inconsistent(e.to_string()),
+                })?
+            }
+            None => Simulation::new(
+                self.config.lengths,
+                &self.config.positions,
+                self.velocities,
+                &self.config.species,
+                model,
+                self.settings,
+            )
+            .map_err(|e| setup_error(scene, self.config, &self.units, e))?,
+        };
+        let every = resume.map_or(self.options.checkpoint_every, |(_, c)| {
+            self.options.checkpoint_every.or(c.every)
+        });
+        let source = resume
+            .map(|(_, c)| c.source.clone())
+            .or_else(|| self.options.source.clone());
+        let mut run = Driver {
+            saver: Saver::new(every, self.out, source),
+            record: resume.map(|(_, c)| c.record.clone()).unwrap_or_default(),
+            chain: resume.and_then(|(_, c)| c.chain.clone()).or_else(|| {
+                scene
+                    .hmc
+                    .as_ref()
+                    .map(|h| Chain::new(hmc_settings(scene), h.series))
+            }),
+            started: None,
+            events: 0,
+            halt: self.options.halt_after_checkpoint,
+        };
+        sim.set_pause_at_rebase(run.saver.active() && scene.hmc.is_none());
 
         // Equilibration.
         let andersen = (scene.thermostat.kind == ThermostatKind::Andersen).then(|| Andersen {
@@ -376,23 +500,47 @@ impl Context<'_> {
             None => Stop::Events(scene.run.equilibration_events),
         };
         let equilibrate = !matches!(eq_stop, Stop::Events(0) | Stop::Time(0.0));
-        let mut equilibration_events = 0;
-        if equilibrate {
+        let hmc_eq = scene.hmc.as_ref().map_or(0, |h| h.equilibration_segments);
+        let mut stage = match resume {
+            Some((_, c)) => c.stage,
+            None if equilibrate => Stage::Equilibration(left_of(eq_stop)),
+            None if hmc_eq > 0 => Stage::Equilibration(Left::Segments(hmc_eq)),
+            None => Stage::Production(Left::Events(0)),
+        };
+        if resume.is_none() && equilibrate {
+            run.record.had_thermostat = andersen.is_some();
             if andersen.is_some() {
                 sim.set_thermostat(andersen);
             }
+        }
+        if let Stage::Equilibration(left @ (Left::Events(_) | Left::Time(_))) = stage {
             reporter.phase("equilibration", eq_stop);
-            sim.run(eq_stop, &mut crate::simulation::NoSampler, &mut |p| {
-                reporter.progress(p)
-            })?;
+            run.plain(&mut sim, left, false, &mut Observers::default(), reporter)?;
             reporter.done();
-            equilibration_events = sim.counters().events;
+            run.record.equilibration_events = sim.counters().events;
+            stage = if hmc_eq > 0 {
+                Stage::Equilibration(Left::Segments(hmc_eq))
+            } else {
+                Stage::Production(Left::Events(0))
+            };
         }
         let production_thermostat =
             andersen.filter(|_| scene.thermostat.during == ThermostatPhase::Always);
-        let had_thermostat = equilibrate && andersen.is_some();
-        if had_thermostat != production_thermostat.is_some() {
+        let had_thermostat = run.record.had_thermostat;
+        let fresh_production =
+            !matches!(resume, Some((_, c)) if matches!(c.stage, Stage::Production(_)));
+        if fresh_production && had_thermostat != production_thermostat.is_some() {
             sim.set_thermostat(production_thermostat);
+        }
+        if let Stage::Equilibration(Left::Segments(left)) = stage {
+            // HMC equilibration segments (not recorded).
+            if !sim.at_origin() {
+                sim.begin_phase(had_thermostat, None, None);
+                sim.move_origin_here();
+            }
+            reporter.phase("hmc equilibration", Stop::Events(hmc_eq));
+            run.segments(&mut sim, left, false, reporter)?;
+            reporter.done();
         }
 
         // Production.
@@ -432,41 +580,86 @@ impl Context<'_> {
         }
         let out = self.out;
         if let (Some(_), Some(dir)) = (&o.trajectory, out) {
-            observers.trajectory = Some(Trajectory::create(
-                &dir.join("trajectory.xyz"),
-                scene.species.iter().map(|s| s.name.clone()).collect(),
-            )?);
+            let names = scene.species.iter().map(|s| s.name.clone()).collect();
+            let path = dir.join("trajectory.xyz");
+            observers.trajectory = Some(match resume {
+                Some((_, c)) if !fresh_production => {
+                    let (len, frames) = c.observers.trajectory.unwrap_or((0, 0));
+                    Trajectory::reopen(&path, names, len, frames)?
+                }
+                _ => Trajectory::create(&path, names)?,
+            });
         }
-        let wants_samples = observers.rdf.is_some()
-            || observers.correlations.is_some()
-            || observers.series.is_some();
-        sim.begin_phase(
-            had_thermostat && production_thermostat.is_none(),
-            o.sample_interval.filter(|_| wants_samples),
-            o.trajectory
-                .as_ref()
-                .filter(|_| out.is_some())
-                .map(|t| t.interval),
-        );
-        let k0 = sim.kinetic_energy();
-        let e0 = k0 + sim.potential_energy();
-        let (p0, _) = sim.momentum_and_mass();
-        let p_scale = sim.momentum_scale();
-        let stop = match (scene.run.events, scene.run.time) {
-            (Some(e), _) => Stop::Events(e),
-            (None, Some(t)) => Stop::Time(t),
-            (None, None) => unreachable!("checked"),
+        let stop = match (scene.run.events, scene.run.time, &scene.hmc) {
+            (_, _, Some(h)) => Stop::Events(h.segments),
+            (Some(e), _, _) => Stop::Events(e),
+            (None, Some(t), _) => Stop::Time(t),
+            (None, None, None) => unreachable!("checked"),
         };
-        reporter.phase("production", stop);
-        let search0 = sim.model().search_stats();
+        if fresh_production {
+            let wants_samples = observers.rdf.is_some()
+                || observers.correlations.is_some()
+                || observers.series.is_some();
+            sim.begin_phase(
+                had_thermostat && production_thermostat.is_none(),
+                o.sample_interval.filter(|_| wants_samples),
+                o.trajectory
+                    .as_ref()
+                    .filter(|_| out.is_some())
+                    .map(|t| t.interval),
+            );
+            if scene.hmc.is_some() {
+                sim.move_origin_here();
+            }
+            let (p0, _) = sim.momentum_and_mass();
+            let k0 = sim.kinetic_energy();
+            run.record.start = Some((
+                k0,
+                k0 + sim.potential_energy(),
+                p0.to_array(),
+                sim.momentum_scale(),
+            ));
+            run.record.search_start = sim.model().search_stats();
+            stage = Stage::Production(match &scene.hmc {
+                Some(h) => Left::Segments(h.segments),
+                None => left_of(stop),
+            });
+        } else if let Some((_, c)) = resume {
+            observers.rdf = c.observers.rdf.clone();
+            observers.correlations = c.observers.correlations.clone();
+            observers.series = c.observers.series.clone();
+        }
+        let (k0, e0, p0, p_scale) = run.record.start.expect("set when production starts");
+        let p0 = DVec3::from_array(p0);
+        let search0 = run.record.search_start;
+        reporter.phase(
+            if scene.hmc.is_some() {
+                "hmc production"
+            } else {
+                "production"
+            },
+            stop,
+        );
         let wall = Instant::now();
         let cpu0 = thread_cpu_seconds();
-        sim.run(stop, &mut observers, &mut |p| reporter.progress(p))?;
-        let wall_seconds = wall.elapsed().as_secs_f64();
-        let cpu_seconds = match (cpu0, thread_cpu_seconds()) {
-            (Some(a), Some(b)) => b - a,
-            _ => wall_seconds,
-        };
+        let (wall_before, cpu_before) = run.record.seconds;
+        run.started = Some((wall, cpu0));
+        match stage {
+            Stage::Production(Left::Segments(left)) => {
+                if let Some(c) = &mut run.chain {
+                    c.recording = true;
+                }
+                run.segments(&mut sim, left, true, reporter)?;
+            }
+            Stage::Production(left) => run.plain(&mut sim, left, true, &mut observers, reporter)?,
+            Stage::Equilibration(_) => unreachable!("equilibration ended above"),
+        }
+        let wall_seconds = wall_before + wall.elapsed().as_secs_f64();
+        let cpu_seconds = cpu_before
+            + match (cpu0, thread_cpu_seconds()) {
+                (Some(a), Some(b)) => b - a,
+                _ => wall.elapsed().as_secs_f64(),
+            };
         reporter.done();
 
         // Summary.
@@ -536,7 +729,7 @@ impl Context<'_> {
         let mut summary = Summary {
             events: counters.events,
             events_by_kind: by_kind,
-            equilibration_events,
+            equilibration_events: run.record.equilibration_events,
             wall_seconds,
             cpu_seconds,
             events_per_second: counters.events as f64 / wall_seconds,
@@ -606,14 +799,279 @@ impl Context<'_> {
                 .and_then(Correlations::diffusion_from_vacf),
             seed: scene.seed,
             files: Vec::new(),
+            hmc: run
+                .chain
+                .as_ref()
+                .map(|c| hmc_out(c.summary(n as usize), &u)),
         };
         if let Some(dir) = out {
             summary.files = write_observables(dir, &mut observers, o.plots, &self.units)?;
+            if let Some(series) = run.chain.as_ref().and_then(|c| c.series.as_ref()) {
+                write_hmc_series(&dir.join("hmc.csv"), series, &self.units)?;
+                summary.files.push("hmc.csv".to_owned());
+            }
             let json = serde_json::to_string_pretty(&summary).expect("a summary serialises");
             write_atomically(&dir.join("summary.json"), json.as_bytes())?;
         }
         Ok(summary)
     }
+}
+
+// ----- Checkpoints and HMC segments (issue 9) ---------------------------------------------------
+
+/// Runs the phases of a scene in pieces, saving checkpoints between them.
+struct Driver {
+    saver: Saver,
+    record: RunRecord,
+    chain: Option<Chain>,
+    /// When production started in this process (wall clock, thread CPU seconds).
+    started: Option<(Instant, Option<f64>)>,
+    /// Events executed by this process (the checkpoint interval counts them).
+    events: u64,
+    /// Stop after the first checkpoint.
+    halt: bool,
+}
+
+impl Driver {
+    /// Runs plain dynamics for `left`, pausing at re-basings to save checkpoints when due.
+    fn plain<M: PairModel, Q: Scheduler>(
+        &mut self,
+        sim: &mut Simulation<M, Q>,
+        mut left: Left,
+        production: bool,
+        observers: &mut Observers,
+        reporter: &mut dyn Reporter,
+    ) -> Result<(), RunError> {
+        loop {
+            let stop = match left {
+                Left::Events(n) => Stop::Events(n),
+                Left::Time(t) => Stop::Time(t),
+                Left::Segments(_) => unreachable!("segments are run by `segments`"),
+            };
+            let before = sim.counters().events;
+            sim.run(stop, observers, &mut |p| reporter.progress(p))?;
+            let done = sim.counters().events - before;
+            self.events += done;
+            if !sim.take_paused() {
+                return Ok(());
+            }
+            left = match left {
+                Left::Events(n) => Left::Events(n - done),
+                _ => Left::Time(sim.remaining_time()),
+            };
+            let stage = if production {
+                Stage::Production(left)
+            } else {
+                Stage::Equilibration(left)
+            };
+            self.checkpoint(sim, stage, observers)?;
+        }
+    }
+
+    /// Runs `left` HMC segments, saving checkpoints between them when due.
+    fn segments<M: PairModel, Q: Scheduler>(
+        &mut self,
+        sim: &mut Simulation<M, Q>,
+        left: u64,
+        production: bool,
+        reporter: &mut dyn Reporter,
+    ) -> Result<(), RunError> {
+        for k in 0..left {
+            let chain = self.chain.as_mut().expect("a scene with [hmc] has a chain");
+            let seg = chain.segment(sim)?;
+            self.events += seg.events;
+            reporter.progress(Progress {
+                events: if production {
+                    chain.stats.segments
+                } else {
+                    k + 1
+                },
+                elapsed: sim.phase_elapsed(),
+            });
+            let rest = left - k - 1;
+            if rest > 0 {
+                let stage = if production {
+                    Stage::Production(Left::Segments(rest))
+                } else {
+                    Stage::Equilibration(Left::Segments(rest))
+                };
+                self.checkpoint(sim, stage, &mut Observers::default())?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Saves a checkpoint if one is due (the simulation is at a re-basing).
+    fn checkpoint<M: PairModel, Q: Scheduler>(
+        &mut self,
+        sim: &Simulation<M, Q>,
+        stage: Stage,
+        observers: &mut Observers,
+    ) -> Result<(), RunError> {
+        if !self.saver.due(self.events) {
+            return Ok(());
+        }
+        let mut record = self.record.clone();
+        if let Some((wall, cpu0)) = self.started {
+            record.seconds.0 += wall.elapsed().as_secs_f64();
+            record.seconds.1 += match (cpu0, thread_cpu_seconds()) {
+                (Some(a), Some(b)) => b - a,
+                _ => wall.elapsed().as_secs_f64(),
+            };
+        }
+        let trajectory = match &mut observers.trajectory {
+            Some(t) => Some(t.mark()?),
+            None => None,
+        };
+        let chain = &self.chain;
+        self.saver.save(self.events, |source, every| {
+            Ok(Checkpoint {
+                source,
+                every,
+                stage,
+                sim: sim.save_state(),
+                record,
+                observers: ObserverState {
+                    rdf: observers.rdf.clone(),
+                    correlations: observers.correlations.clone(),
+                    series: observers.series.clone(),
+                    trajectory,
+                },
+                chain: chain.clone(),
+            })
+        })?;
+        if self.halt {
+            return Err(RunError::Halted);
+        }
+        Ok(())
+    }
+}
+
+/// A checkpoint's bodies must be the scene's (count and species) before anything is built.
+fn check_checkpoint_scene(
+    scene: &Scene,
+    path: &Path,
+    c: &Checkpoint,
+) -> Result<(), CheckpointError> {
+    let bad = |m: String| CheckpointError {
+        path: path.to_owned(),
+        problem: Problem::Inconsistent(crate::simulation::StateError(m).to_string()),
+    };
+    let n = scene.n_bodies();
+    if c.sim.bodies.len() as u64 != n {
+        return Err(bad(format!(
+            "it has {} bodies, the scene {n}",
+            c.sim.bodies.len()
+        )));
+    }
+    for (s, sp) in scene.species.iter().enumerate() {
+        let have = c
+            .sim
+            .bodies
+            .iter()
+            .filter(|b| b.species == s as u32)
+            .count() as u64;
+        if have != sp.count {
+            return Err(bad(format!(
+                "it has {have} bodies of species `{}`, the scene {}",
+                sp.name, sp.count
+            )));
+        }
+    }
+    Ok(())
+}
+
+fn left_of(stop: Stop) -> Left {
+    match stop {
+        Stop::Events(n) => Left::Events(n),
+        Stop::Time(t) => Left::Time(t),
+    }
+}
+
+/// The chain settings of a scene with `[hmc]`.
+fn hmc_settings(scene: &Scene) -> HmcSettings {
+    let h = scene.hmc.as_ref().expect("a scene with [hmc]");
+    HmcSettings {
+        ensemble: match h.ensemble {
+            EnsembleKind::Canonical => Ensemble::Canonical,
+            EnsembleKind::Microcanonical => Ensemble::Microcanonical,
+        },
+        segment_time: h.segment_time,
+        temperature: h.temperature.unwrap_or(scene.init.temperature),
+        exchanges: h.exchanges.unwrap_or_else(|| scene.n_bodies()),
+        tolerance: h.tolerance,
+        acceptance: match h.accept {
+            AcceptKind::Metropolis => Acceptance::Metropolis,
+            AcceptKind::Always => Acceptance::Always,
+        },
+        histogram_bins: h.histogram_bins as usize,
+        histogram_range: h.histogram_range,
+        seed: scene.seed,
+    }
+}
+
+/// `hmc.csv`: one row per production segment (outcome: 0 accepted, 1 overlap, 2 energy,
+/// 3 non-finite).
+/// The HMC summary in the scene's units (energies and the temperature; `ΔH` histograms and
+/// `e^{−βΔH}` are dimensionless or counts).
+fn hmc_out(mut h: HmcSummary, u: &Units) -> HmcSummary {
+    h.temperature = u.temperature_out(h.temperature);
+    h.delta_h_mean = u.energy_out(h.delta_h_mean);
+    h.delta_h_max_abs = u.energy_out(h.delta_h_max_abs);
+    h.delta_h_histogram.low = u.energy_out(h.delta_h_histogram.low);
+    h.delta_h_histogram.high = u.energy_out(h.delta_h_histogram.high);
+    for b in [
+        &mut h.potential_energy_per_body,
+        &mut h.kinetic_energy_per_body,
+    ] {
+        b.mean = u.energy_out(b.mean);
+        b.error = u.energy_out(b.error);
+    }
+    h
+}
+
+fn write_hmc_series(
+    path: &Path,
+    series: &[crate::hmc::Segment],
+    u: &Units,
+) -> Result<(), OutputError> {
+    use crate::hmc::Outcome;
+    let rows: Vec<Vec<f64>> = series
+        .iter()
+        .map(|s| {
+            vec![
+                s.index as f64,
+                f64::from(u8::from(s.outcome == Outcome::Accepted)),
+                match s.outcome {
+                    Outcome::Accepted => 0.0,
+                    Outcome::Overlap => 1.0,
+                    Outcome::Energy => 2.0,
+                    Outcome::NonFinite => 3.0,
+                },
+                u.energy_out(s.delta_h),
+                u.energy_out(s.kinetic),
+                u.energy_out(s.potential),
+                s.events as f64,
+                s.mismatched as f64,
+                s.overlaps as f64,
+            ]
+        })
+        .collect();
+    write_csv(
+        path,
+        &[
+            "segment",
+            "accepted",
+            "outcome",
+            "delta_h",
+            "kinetic",
+            "potential",
+            "events",
+            "mismatched",
+            "overlaps",
+        ],
+        &rows,
+    )
 }
 
 /// The neighbour-list skin: `run.skin`, or by default 0.3 × the Boltzmann mean free path

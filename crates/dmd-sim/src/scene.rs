@@ -101,6 +101,15 @@ pub struct Scene {
     pub output: OutputSpec,
     /// Root searches of event times (terraced potentials of rods only).
     pub search: Option<SearchSpec>,
+    /// Hybrid Monte Carlo (issue 9; off unless given).
+    #[serde(default)]
+    pub hmc: Option<HmcSpec>,
+    /// Independent chains of the scene run in parallel (issue 9).
+    #[serde(default)]
+    pub chains: Option<ChainsSpec>,
+    /// A parameter sweep: the scene run once per value of a key (issue 9).
+    #[serde(default)]
+    pub sweep: Option<SweepSpec>,
 }
 
 /// The unit system of a scene's numbers.
@@ -113,6 +122,102 @@ pub enum UnitSystem {
     /// Lengths in Å, masses in g/mol, energies in kJ/mol, times in ps, temperatures in K,
     /// moments of inertia in g/mol·Å² (see [`units`](crate::units)).
     Molecular,
+}
+
+// ----- Hybrid Monte Carlo, chains and sweeps (issue 9) ------------------------------------------
+
+/// The ensemble an HMC chain samples.
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum EnsembleKind {
+    /// Gaussian momenta at `hmc.temperature`, Metropolis acceptance.
+    #[default]
+    Canonical,
+    /// Velocity exchanges, acceptance only if the energy did not change.
+    Microcanonical,
+}
+
+/// How HMC segments are accepted.
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum AcceptKind {
+    /// The HMC rule (default).
+    #[default]
+    Metropolis,
+    /// Every segment: plain dynamics with momentum refreshes (a validation comparison).
+    Always,
+}
+
+/// `[hmc]`: event-driven segments inside a hybrid Monte Carlo chain (seed 000 §V).
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct HmcSpec {
+    /// `canonical` (default) or `microcanonical`.
+    #[serde(default)]
+    pub ensemble: EnsembleKind,
+    /// Simulated time of a segment, τ.
+    pub segment_time: f64,
+    /// Production segments.
+    #[serde(deserialize_with = "count")]
+    pub segments: u64,
+    /// Segments before production (not recorded).
+    #[serde(default, deserialize_with = "count")]
+    pub equilibration_segments: u64,
+    /// Temperature of the canonical chain (default `init.temperature`); the energy unit of the
+    /// ΔH histogram of a microcanonical one.
+    pub temperature: Option<f64>,
+    /// Velocity exchanges per segment (microcanonical; default N).
+    #[serde(default, deserialize_with = "opt_count")]
+    pub exchanges: Option<u64>,
+    /// Relative tolerance on ΔH within which it is round-off (default 1e-9).
+    #[serde(default = "default_tolerance")]
+    pub tolerance: f64,
+    /// `metropolis` (default) or `always`.
+    #[serde(default)]
+    pub accept: AcceptKind,
+    /// Validation: fraction of pairs blind to their events in each segment (default 0).
+    #[serde(default)]
+    pub fault_fraction: f64,
+    /// Write `hmc.csv`, one row per production segment.
+    #[serde(default)]
+    pub series: bool,
+    /// Bins of the ΔH histogram (default 40).
+    #[serde(default = "default_histogram_bins", deserialize_with = "count")]
+    pub histogram_bins: u64,
+    /// Half width of the ΔH histogram in units of the temperature (default 10).
+    #[serde(default = "default_histogram_range")]
+    pub histogram_range: f64,
+}
+
+fn default_tolerance() -> f64 {
+    1e-9
+}
+
+fn default_histogram_bins() -> u64 {
+    40
+}
+
+fn default_histogram_range() -> f64 {
+    10.0
+}
+
+/// `[chains]`: independent copies of the scene with their own seeds.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ChainsSpec {
+    /// Number of chains.
+    #[serde(deserialize_with = "count")]
+    pub count: u64,
+}
+
+/// `[sweep]`: the scene run once per value of one key.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SweepSpec {
+    /// The dotted key (as for `--set`).
+    pub key: String,
+    /// Its values.
+    pub values: Vec<toml::Value>,
 }
 
 fn default_seed() -> u64 {
@@ -618,7 +723,46 @@ impl Scene {
             },
         )?;
         scene.check()?;
+        scene.check_sweep_points(text, overrides)?;
         Ok(scene)
+    }
+
+    /// The scene of one point of a `[sweep]` (issue 9): the key set to value `k`, the sweep
+    /// and chains tables removed.
+    ///
+    /// # Errors
+    /// The point's [`SceneError`], under the key `sweep.values[k]`.
+    pub fn sweep_point(
+        &self,
+        text: &str,
+        overrides: &[String],
+        k: usize,
+    ) -> Result<Scene, SceneError> {
+        let Some(sw) = &self.sweep else {
+            return Ok(self.clone());
+        };
+        let mut o = overrides.to_vec();
+        o.push(format!("{}={}", sw.key, sw.values[k]));
+        o.push("sweep=".to_owned());
+        if self.chains.is_some() {
+            o.push("chains=".to_owned());
+        }
+        Scene::from_str_with(text, &o).map_err(|e| {
+            SceneError::invalid(
+                format!("sweep.values[{k}]"),
+                format!("with {} = {}: {e}", sw.key, sw.values[k]),
+            )
+        })
+    }
+
+    /// Every point of a sweep must be a valid scene.
+    fn check_sweep_points(&self, text: &str, overrides: &[String]) -> Result<(), SceneError> {
+        if let Some(sw) = &self.sweep {
+            for k in 0..sw.values.len() {
+                self.sweep_point(text, overrides, k)?;
+            }
+        }
+        Ok(())
     }
 
     /// Applies one `KEY=VALUE` override to a parsed scene document. `KEY` is a dotted path
@@ -915,12 +1059,13 @@ impl Scene {
                     "give either `events` or `time`, not both",
                 ));
             }
-            (None, None) => {
+            (None, None) if self.hmc.is_none() => {
                 return Err(SceneError::invalid(
                     "run",
                     "give the production length: `events` or `time`",
                 ));
             }
+            (None, None) => {}
             (_, Some(t)) => positive("run.time", t)?,
             (Some(_), None) => {}
         }
@@ -993,6 +1138,113 @@ impl Scene {
         }
         if let Some(tr) = &o.trajectory {
             positive("output.trajectory.interval", tr.interval)?;
+        }
+        self.check_issue_9()
+    }
+
+    /// Checks `[hmc]`, `[chains]` and `[sweep]`.
+    fn check_issue_9(&self) -> Result<(), SceneError> {
+        if let Some(h) = &self.hmc {
+            positive("hmc.segment_time", h.segment_time)?;
+            if h.segments == 0 {
+                return Err(SceneError::invalid("hmc.segments", "must be at least 1"));
+            }
+            if let Some(t) = h.temperature {
+                positive("hmc.temperature", t)?;
+            }
+            if h.exchanges.is_some() && h.ensemble != EnsembleKind::Microcanonical {
+                return Err(SceneError::invalid(
+                    "hmc.exchanges",
+                    "only used by the microcanonical ensemble",
+                ));
+            }
+            positive("hmc.tolerance", h.tolerance)?;
+            if !(0.0..1.0).contains(&h.fault_fraction) {
+                return Err(SceneError::invalid(
+                    "hmc.fault_fraction",
+                    format!(
+                        "must be at least 0 and less than 1, got {}",
+                        h.fault_fraction
+                    ),
+                ));
+            }
+            if h.histogram_bins == 0 || h.histogram_bins > 1_000_000 {
+                return Err(SceneError::invalid(
+                    "hmc.histogram_bins",
+                    format!("must be between 1 and 10^6, got {}", h.histogram_bins),
+                ));
+            }
+            positive("hmc.histogram_range", h.histogram_range)?;
+            if h.fault_fraction > 0.0 && self.has_rods() {
+                return Err(SceneError::invalid(
+                    "hmc.fault_fraction",
+                    "hmc with rods is not supported with fault injection: it hides pairs of \
+                     the analytic sphere models, while the rods' root searches miss events of \
+                     their own (coarsen search.max_step to make them miss); set it to 0",
+                ));
+            }
+            for (key, given) in [
+                ("run.events", self.run.events.is_some()),
+                ("run.time", self.run.time.is_some()),
+            ] {
+                if given {
+                    return Err(SceneError::invalid(
+                        key,
+                        "with [hmc] the production length is hmc.segments × \
+                         hmc.segment_time: remove it",
+                    ));
+                }
+            }
+            if self.thermostat.kind == ThermostatKind::Andersen
+                && self.thermostat.during == ThermostatPhase::Always
+            {
+                return Err(SceneError::invalid(
+                    "thermostat.during",
+                    "HMC is the thermostat of production: an Andersen thermostat may act during \
+                     equilibration only",
+                ));
+            }
+            let o = &self.output;
+            for (key, on) in [
+                ("output.sample_interval", o.sample_interval.is_some()),
+                ("output.rdf", o.rdf.is_some()),
+                ("output.msd", o.msd.is_some()),
+                ("output.vacf", o.vacf.is_some()),
+                ("output.series", o.series),
+                ("output.trajectory", o.trajectory.is_some()),
+                ("output.orientation_acf", o.orientation_acf.is_some()),
+            ] {
+                if on {
+                    return Err(SceneError::invalid(
+                        key,
+                        "not sampled with [hmc]: the chain states are summarised in the `hmc` \
+                         section of summary.json and, with hmc.series = true, in hmc.csv",
+                    ));
+                }
+            }
+        }
+        if let Some(c) = &self.chains
+            && !(1..=10_000).contains(&c.count)
+        {
+            return Err(SceneError::invalid(
+                "chains.count",
+                format!("must be between 1 and 10^4, got {}", c.count),
+            ));
+        }
+        if let Some(sw) = &self.sweep {
+            if sw.values.is_empty() {
+                return Err(SceneError::invalid(
+                    "sweep.values",
+                    "at least one value is needed",
+                ));
+            }
+            let first = sw.key.split('.').next().unwrap_or("");
+            if sw.key.trim().is_empty() || ["sweep", "chains", "version"].contains(&first) {
+                return Err(SceneError::invalid(
+                    "sweep.key",
+                    format!("`{}` cannot be swept", sw.key),
+                ));
+            }
         }
         Ok(())
     }

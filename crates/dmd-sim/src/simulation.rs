@@ -40,6 +40,12 @@ use crate::neighbour::{self, NeighbourLists};
 use crate::schedule::Scheduler;
 use crate::sum::Compensated;
 
+// Hybrid Monte Carlo segments and checkpoints (issue 9): saving and restoring the state at a
+// re-basing of the time origin, pausing there, and the energy of a configuration from its
+// distances. A child module, so that it reaches the loop's private state.
+mod state;
+pub use state::{BodyRecord, SimState, StateError, TrueEnergy, true_level};
+
 /// Why a simulation could not go on.
 #[derive(Debug, thiserror::Error)]
 pub enum SimError {
@@ -129,7 +135,7 @@ pub enum Stop {
 }
 
 /// Events executed, by kind.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct Counters {
     /// All counted events (the sum of the kinds below, sampling excluded).
     pub events: u64,
@@ -163,7 +169,7 @@ impl Counters {
 
 /// Things that should not happen, counted instead of crashing (release builds; debug builds
 /// also check the invariants periodically and stop at the first violation).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct Anomalies {
     /// Events popped with a time before the present.
     pub negative_time: u64,
@@ -352,6 +358,11 @@ pub struct Simulation<M, S> {
     since_rebase: u64,
     since_check: u64,
     nan: Option<u32>,
+    // Issue 9: `run` returns at a re-basing when asked (a checkpoint can be taken there), and
+    // momenta are refreshed by HMC (3N degrees of freedom).
+    pause_at_rebase: bool,
+    paused: bool,
+    refreshed_momenta: bool,
 }
 
 impl<M, S> Simulation<M, S>
@@ -508,6 +519,9 @@ where
             since_rebase: 0,
             since_check: 0,
             nan: None,
+            pause_at_rebase: false,
+            paused: false,
+            refreshed_momenta: false,
         };
         sim.kinetic = sim.kinetic_energy();
         sim.translational = sim.translational_kinetic();
@@ -529,6 +543,7 @@ where
         sampler: &mut dyn Sampler,
         progress: &mut dyn FnMut(Progress),
     ) -> Result<(), SimError> {
+        self.paused = false;
         if let Stop::Time(d) = stop {
             self.end = self.now + d;
             self.schedule_system();
@@ -543,6 +558,11 @@ where
             }
             if self.since_rebase >= self.settings.rebase_events {
                 self.rebase();
+                // Issue 9: a checkpoint can be taken here (see `state`).
+                if self.pause_at_rebase {
+                    self.paused = true;
+                    break;
+                }
             }
             if self.counters.events & 0x3fff == 0 {
                 progress(Progress {
@@ -562,6 +582,10 @@ where
                     );
                 }
             }
+        }
+        if self.paused {
+            // Issue 9: paused at a re-basing; `end` stays for the continuation.
+            return Ok(());
         }
         if self.end < f64::INFINITY {
             self.end = f64::INFINITY;
@@ -1144,11 +1168,12 @@ where
     }
 
     /// Degrees of freedom of the kinetic temperature: 3N − 3 when momentum is conserved, 3N
-    /// with a thermostat acting, plus the rotational ones (2 per rod).
+    /// with a thermostat acting (or HMC momenta refreshed from the Gaussian distribution), plus
+    /// the rotational ones (2 per rod).
     pub fn dof(&self) -> f64 {
         let n = self.bodies.len() as f64;
         let rotation = self.model.rotational_dof();
-        if self.thermostat.is_some() {
+        if self.thermostat.is_some() || self.refreshed_momenta {
             3.0 * n + rotation
         } else {
             3.0 * n - 3.0 + rotation

@@ -1498,6 +1498,65 @@ impl PairModel for Sites {
         })
     }
 
+    // Site molecules store a level per *site* pair in their own map, not one level per
+    // molecule pair: the loop's per-pair level is always 0 for them. HMC's ΔH reads the energy
+    // judged from the site distances below; the saved state of checkpoints and of HMC's
+    // rollback cannot carry the site levels yet, so restoring one is refused
+    // (`set_extra_state`) rather than silently losing them.
+    fn level(&self, _i: u32, _j: u32) -> u16 {
+        0
+    }
+
+    fn set_level(&mut self, _i: u32, _j: u32, level: u16) {
+        debug_assert_eq!(level, 0, "site molecules keep their levels per site pair");
+    }
+
+    fn storable_level(&self, _si: u32, _sj: u32, _level: u16) -> bool {
+        false
+    }
+
+    fn configured_level(
+        &self,
+        i: u32,
+        j: u32,
+        _si: u32,
+        _sj: u32,
+        now: f64,
+        dr: DVec3,
+        _stored: u16,
+    ) -> (u16, f64) {
+        let (lo, hi) = (i.min(j), i.max(j));
+        // `dr` is r_i − r_j: orient it from the lower index like the stored levels.
+        let dr = if i == lo { dr } else { -dr };
+        let stored = self.levels.get(&(lo, hi));
+        let tp = self.type_pair(lo, hi);
+        let (olo, _) = self.pose(lo, now);
+        let (ohi, _) = self.pose(hi, now);
+        let (tlo, thi) = (
+            self.body_type[lo as usize] as usize,
+            self.body_type[hi as usize] as usize,
+        );
+        let mut e = 0.0;
+        for (k, sp) in self.type_pairs[tp].pairs.iter().enumerate() {
+            let pot = &self.potentials.all()[sp.potential as usize];
+            let d = (dr + olo * self.types[tlo].sites[sp.a as usize]
+                - ohi * self.types[thi].sites[sp.b as usize])
+                .length();
+            let held = stored.map_or(0, |l| l[k] as usize);
+            let level = crate::simulation::true_level(pot, held, d);
+            e += pot.levels()[level].energy;
+        }
+        (0, e)
+    }
+
+    fn set_extra_state(&mut self, _state: &[f64]) -> Result<(), String> {
+        Err(
+            "site molecules cannot be restored from a saved state (checkpoints and HMC \
+             rollbacks do not carry their site-pair levels and attitudes yet)"
+                .to_owned(),
+        )
+    }
+
     fn pair_energy(&self, i: u32, j: u32, _si: u32, _sj: u32) -> f64 {
         let Some(l) = self.levels.get(&(i.min(j), i.max(j))) else {
             return 0.0;

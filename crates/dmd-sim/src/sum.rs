@@ -2,7 +2,7 @@
 
 /// A Neumaier-compensated sum: the error stays at a few ulps of the total after 10⁹ terms,
 /// where a plain `f64` sum can lose 10⁻⁷ relative.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Compensated {
     sum: f64,
     carry: f64,

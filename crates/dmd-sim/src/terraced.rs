@@ -42,7 +42,6 @@
 use collide::{LinearBody, Outcome, PairForce, Velocity, terrace};
 use glam::DVec3;
 use potential::{PairGeometry, PairPotential, PotentialError, TerraceMap};
-use rand::{RngExt, SeedableRng};
 use rand_distr::{Distribution, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;
 use rigid_free::LinearRotor;
@@ -105,7 +104,7 @@ impl SearchSettings {
 }
 
 /// Counters of the root searches of a run.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct SearchStats {
     /// Search calls (started or resumed).
     pub searches: u64,
@@ -379,7 +378,8 @@ pub struct Terraced<P> {
     settings: SearchSettings,
     adaptive: Adaptive,
     verify: Option<Grid>,
-    rng: Xoshiro256PlusPlus,
+    /// The key of the jitter of the search steps (a hash of it, the pair and the time).
+    jitter_key: u64,
     stats: SearchStats,
     reach: f64,
 }
@@ -389,7 +389,7 @@ impl<P: PairPotential> Terraced<P> {
     /// species once); body `i` is of species `body_species[i]` (as the loop's bodies) with
     /// initial axis `axes[i]` and lab angular velocity `omegas[i]` (its component along the
     /// axis is dropped: rods have no spin) at time `t0`; searches with `settings`, the jitter
-    /// drawn from `seed`.
+    /// a hash of `seed`, the pair and the time a search call starts from.
     ///
     /// # Errors
     /// [`ModelError`].
@@ -500,7 +500,7 @@ impl<P: PairPotential> Terraced<P> {
             settings,
             adaptive,
             verify,
-            rng: Xoshiro256PlusPlus::seed_from_u64(seed),
+            jitter_key: mix(seed ^ 0x6a17_7e50_0000_0007),
             stats: SearchStats::default(),
             reach,
         })
@@ -603,8 +603,12 @@ impl<P: PairPotential> Terraced<P> {
             }
             band.indicator(u, du)
         };
+        // The jitter is a pure function of the pair and the time the call starts from, never
+        // of a generator's history: a prediction made again from the same state (a saved state
+        // restored, 009) is the same prediction.
         let jitter = if self.settings.jitter > 0.0 {
-            1.0 - self.settings.jitter * self.rng.random::<f64>()
+            let h = mix(mix(self.jitter_key ^ (u64::from(i) << 32 | u64::from(j))) ^ t0.to_bits());
+            1.0 - self.settings.jitter * ((h >> 11) as f64 * (1.0 / 9_007_199_254_740_992.0))
         } else {
             1.0
         };
@@ -1025,6 +1029,175 @@ impl<P: PairPotential> PairModel for Terraced<P> {
     fn search_stats(&self) -> Option<SearchStats> {
         Some(self.stats)
     }
+
+    // ----- hybrid Monte Carlo and checkpoints (009) -------------------------------------------
+
+    #[inline]
+    fn level(&self, i: u32, j: u32) -> u16 {
+        self.states.get(i, j)
+    }
+
+    #[inline]
+    fn set_level(&mut self, i: u32, j: u32, level: u16) {
+        self.states.set(i, j, level);
+    }
+
+    fn clear_levels(&mut self) {
+        self.states = PairStates::new(self.states.n_bodies());
+    }
+
+    fn storable_level(&self, si: u32, sj: u32, level: u16) -> bool {
+        (si as usize) < self.n_species
+            && (sj as usize) < self.n_species
+            && level != 0
+            && level < self.pair(si, sj).terraces
+    }
+
+    fn configured_level(
+        &self,
+        i: u32,
+        j: u32,
+        si: u32,
+        sj: u32,
+        now: f64,
+        dr: DVec3,
+        stored: u16,
+    ) -> (u16, f64) {
+        let pt = self.pair(si, sj);
+        let u = self.energy(i, j, si, sj, now, dr);
+        let Ok(expected) = pt.map.terrace_of(u) else {
+            // Inside the hard core (or U not a number): at contact, on the top terrace.
+            return (pt.stored(pt.terraces - 1), f64::INFINITY);
+        };
+        let kept = pt.terrace(stored) as usize;
+        // The stored terrace stands if U is on it, or beside it within round-off of the level
+        // between them (an event executed there), as in `check_pair`.
+        let k = if kept == expected
+            || (kept.abs_diff(expected) == 1
+                && (u - pt.map.levels()[kept.max(expected) - 1]).abs()
+                    <= 1e-7 * pt.bands[kept].width())
+        {
+            kept
+        } else {
+            expected
+        };
+        let v = pt.stored(k as u16);
+        let energy = if v == 0 { 0.0 } else { pt.map.energies()[k] };
+        (v, energy)
+    }
+
+    fn draw_rotations(&mut self, now: f64, temperature: f64, rng: &mut Xoshiro256PlusPlus) {
+        for (r, &s) in self.rods.iter_mut().zip(&self.body_species) {
+            let axis = r.axis(now);
+            let w = draw_omega(axis, self.species[s as usize].inertia, temperature, rng);
+            if let Ok(rotor) = LinearRotor::new(axis, w) {
+                *r = Rod { rotor, t: now };
+            }
+        }
+    }
+
+    fn reverse_rotations(&mut self) {
+        // HMC reverses at a re-basing (present time 0), where every rod is anchored: there the
+        // reversal is exact, the axis stays and turns back the way it came.
+        for r in &mut self.rods {
+            if r.t == 0.0 {
+                r.rotor = r.rotor.reversed();
+            } else if let Ok(rotor) = LinearRotor::new(r.axis(0.0), -r.rotor.omega()) {
+                *r = Rod { rotor, t: 0.0 };
+            }
+        }
+    }
+
+    fn extra_state(&self) -> Vec<f64> {
+        let mut x = Vec::with_capacity(ROD_NUMBERS * self.rods.len() + STATS_NUMBERS);
+        for r in &self.rods {
+            x.extend_from_slice(&r.rotor.to_parts());
+            x.push(r.t);
+        }
+        for c in stats_counts(&self.stats) {
+            // Each counter as two exact 32-bit halves.
+            x.push((c >> 32) as f64);
+            x.push((c & 0xffff_ffff) as f64);
+        }
+        x
+    }
+
+    fn set_extra_state(&mut self, state: &[f64]) -> Result<(), String> {
+        let n = self.rods.len();
+        if state.len() != ROD_NUMBERS * n + STATS_NUMBERS {
+            return Err(format!(
+                "the rods' state has {} numbers, {n} rods need {}",
+                state.len(),
+                ROD_NUMBERS * n + STATS_NUMBERS
+            ));
+        }
+        let (rods, counts) = state.split_at(ROD_NUMBERS * n);
+        let mut restored = Vec::with_capacity(n);
+        for (i, x) in rods.chunks_exact(ROD_NUMBERS).enumerate() {
+            let parts: [f64; 10] = x[..10].try_into().expect("chunks of ROD_NUMBERS");
+            let rotor = LinearRotor::from_parts(parts)
+                .map_err(|e| format!("rod {i} cannot be restored: {e}"))?;
+            if !x[10].is_finite() {
+                return Err(format!("rod {i} has a non-finite clock"));
+            }
+            restored.push(Rod { rotor, t: x[10] });
+        }
+        let mut c = [0u64; STATS_NUMBERS / 2];
+        for (k, h) in counts.chunks_exact(2).enumerate() {
+            let ok = |v: f64| (0.0..4_294_967_296.0).contains(&v) && v.fract() == 0.0;
+            if !(ok(h[0]) && ok(h[1])) {
+                return Err(format!("search counter {k} is not a count"));
+            }
+            c[k] = (h[0] as u64) << 32 | h[1] as u64;
+        }
+        self.rods = restored;
+        self.stats = stats_from_counts(c);
+        Ok(())
+    }
+}
+
+/// Numbers per rod in [`PairModel::extra_state`]: the rotor's parts and its clock.
+const ROD_NUMBERS: usize = 11;
+
+/// Numbers of the search counters in [`PairModel::extra_state`] (two per counter).
+const STATS_NUMBERS: usize = 20;
+
+fn stats_counts(s: &SearchStats) -> [u64; STATS_NUMBERS / 2] {
+    [
+        s.searches,
+        s.evaluations,
+        s.roots,
+        s.suspended,
+        s.deferred,
+        s.off_terrace,
+        s.misfits,
+        s.failures,
+        s.verified,
+        s.verify_misses,
+    ]
+}
+
+fn stats_from_counts(c: [u64; STATS_NUMBERS / 2]) -> SearchStats {
+    SearchStats {
+        searches: c[0],
+        evaluations: c[1],
+        roots: c[2],
+        suspended: c[3],
+        deferred: c[4],
+        off_terrace: c[5],
+        misfits: c[6],
+        failures: c[7],
+        verified: c[8],
+        verify_misses: c[9],
+    }
+}
+
+/// SplitMix64's finaliser: a well-mixed 64-bit hash.
+fn mix(mut z: u64) -> u64 {
+    z = z.wrapping_add(0x9e37_79b9_7f4a_7c15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^ (z >> 31)
 }
 
 impl<P> Terraced<P> {

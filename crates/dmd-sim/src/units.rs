@@ -118,6 +118,9 @@ impl Scene {
         if let Some(t) = &mut s.thermostat.temperature {
             *t *= u.temperature;
         }
+        if let Some(t) = s.hmc.as_mut().and_then(|h| h.temperature.as_mut()) {
+            *t *= u.temperature;
+        }
         if let Some(sr) = &mut s.search
             && let Some(g) = &mut sr.grid_threshold
         {

@@ -399,3 +399,95 @@ fn verification_catches_the_misses_of_a_coarse_grid() {
     assert!(misses[0] > 10, "coarse grid: {misses:?}");
     assert_eq!(misses[1], 0, "adaptive: {misses:?}");
 }
+
+/// The HMC hooks of the rods (issue 9): the canonical refresh draws `ω ⊥ axis` at the right
+/// temperature, a reversal retraces the axes exactly, the extra state round-trips bit for bit
+/// and refuses a foreign one, and the configured terrace agrees with the energy.
+#[test]
+fn hmc_hooks_of_the_rods() {
+    use rand::SeedableRng;
+    let rod = LjRod::new(1.0, 1.0, 0.3).unwrap();
+    let map = TerraceMap::evenly_spaced(&rod, 0.5, &TerraceOptions::default()).unwrap();
+    let n = 4000;
+    let axes: Vec<DVec3> = (0..n)
+        .map(|i| DVec3::new((i as f64).sin(), (1.3 * i as f64).cos(), 0.4).normalize())
+        .collect();
+    let mut model = rods_model(
+        rod,
+        map,
+        &axes,
+        &vec![DVec3::ZERO; n],
+        SearchSettings::paper(0.02),
+    );
+    assert_eq!(model.rotational_kinetic(), 0.0);
+    let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(1);
+    let kt = 1.7;
+    model.draw_rotations(0.0, kt, &mut rng);
+    // Two degrees of freedom per rod: ⟨K_rot⟩ = N kT (relative error ~ 1/√(2N) ≈ 1.1 %).
+    let k = model.rotational_kinetic() / n as f64;
+    assert!((k / kt - 1.0).abs() < 0.05, "K_rot/N = {k}, kT = {kt}");
+    for i in 0..n as u32 {
+        let s = model.axis(i, 0.0).unwrap();
+        assert!(model.omega(i).dot(s).abs() < 1e-12 * model.omega(i).length().max(1.0));
+    }
+
+    // Reversal at the time origin: the axes retrace their path.
+    let ahead: Vec<DVec3> = (0..n as u32).map(|i| model.axis(i, 0.3).unwrap()).collect();
+    let saved = model.extra_state();
+    model.reverse_rotations();
+    for i in 0..n as u32 {
+        assert_eq!(model.axis(i, -0.3).unwrap(), ahead[i as usize]);
+        assert_eq!(model.axis(i, 0.0).unwrap(), axes_at_zero(&saved, i));
+    }
+
+    // The extra state round-trips exactly and a foreign one is refused.
+    model.set_extra_state(&saved).unwrap();
+    assert_eq!(model.extra_state(), saved);
+    for i in 0..n as u32 {
+        assert_eq!(model.axis(i, 0.3).unwrap(), ahead[i as usize]);
+    }
+    assert!(model.set_extra_state(&saved[1..]).is_err());
+    assert!(model.set_extra_state(&[]).is_err());
+    let mut bad = saved.clone();
+    bad[0] = f64::NAN;
+    assert!(model.set_extra_state(&bad).is_err());
+
+    // The configured terrace: level 0 and no energy far apart; on the stored terrace while U is
+    // on it; the terrace of U after a (missed) change; +∞ inside the core.
+    let far = DVec3::new(0.0, 0.0, 5.0);
+    assert_eq!(model.configured_level(0, 1, 0, 0, 0.0, far, 0), (0, 0.0));
+    let mut seen_well = false;
+    let mut seen_core = false;
+    for k in 0..400 {
+        let dr = DVec3::new(0.0, 0.3 + 0.004 * f64::from(k), 0.0);
+        let u = model.energy(0, 1, 0, 0, 0.0, dr);
+        let (level, e) = model.configured_level(0, 1, 0, 0, 0.0, dr, 0);
+        if e == f64::INFINITY {
+            seen_core = true;
+            assert!(model.storable_level(0, 0, level), "contact level {level}");
+            continue;
+        }
+        // The terrace's energy is within a step of U (the map rounds U to its terraces).
+        assert!(
+            (e - u).abs() <= 0.5 + 1e-9 || level == 0,
+            "U {u}, terrace energy {e}"
+        );
+        if level != 0 {
+            seen_well = true;
+            assert!(model.storable_level(0, 0, level));
+            // Stored on it: it stands.
+            assert_eq!(
+                model.configured_level(0, 1, 0, 0, 0.0, dr, level),
+                (level, e)
+            );
+        }
+    }
+    assert!(seen_well && seen_core);
+    assert!(!model.storable_level(0, 0, 0));
+}
+
+/// The axis of rod `i` at the time origin from a saved extra state (its rotor's `s0`).
+fn axes_at_zero(state: &[f64], i: u32) -> DVec3 {
+    let k = 11 * i as usize;
+    DVec3::new(state[k], state[k + 1], state[k + 2])
+}

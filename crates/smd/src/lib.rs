@@ -13,8 +13,9 @@
 //! - [`observe`]: g(r), MSD, normalised VACF, orientational ACF, energy, temperature and
 //!   pressure series, written as CSV; [`run`]: one call from parameters to results;
 //! - [`units`]: kJ/mol, Å, g/mol make the time unit 0.1 ps; conversions to and from fs;
-//! - [`reference`](mod@reference): the Kolafa–Nezbeda Lennard-Jones equation of state and the correction from
-//!   the smoothed to the full potential, to check runs (SMD or terraced DMD) against.
+//! - [`reference`](mod@reference): the Kolafa–Nezbeda Lennard-Jones equation of state and the
+//!   correction from the smoothed to the full potential, to check runs (SMD or terraced DMD)
+//!   against.
 //!
 //! A run that blows up is an error ([`SmdError::Unstable`], [`SmdError::Overlap`]), never NaN.
 //!

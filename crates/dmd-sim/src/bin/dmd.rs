@@ -2,14 +2,17 @@
 //!
 //! `dmd run SCENE.toml --out DIR [--set KEY=VALUE]...` runs a scene, shows a progress bar on a
 //! terminal, prints a summary and writes `DIR/summary.json` plus the outputs the scene asks
-//! for. `dmd check SCENE.toml` only reads and checks the scene.
+//! for. `dmd check SCENE.toml` only reads and checks the scene. `dmd run --checkpoint-every`
+//! saves `DIR/checkpoint.dmd` from time to time, and `dmd resume CHECKPOINT` continues such a
+//! run bit for bit; a scene with `[chains]` or `[sweep]` runs its jobs in parallel (issue 9).
 
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
-use dmd_sim::run::{Reporter, Summary, run_scene};
+use dmd_sim::checkpoint::{self, Every, SceneSource};
+use dmd_sim::run::{Reporter, RunOptions, Summary, run_scene_with};
 use dmd_sim::scene::Scene;
 use dmd_sim::simulation::{Progress, Stop};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -39,6 +42,36 @@ enum Command {
         /// No progress bar and no summary on the terminal.
         #[arg(long, short)]
         quiet: bool,
+        /// Save DIR/checkpoint.dmd this often: a number of events (1e7) or a wall-clock time
+        /// (90s, 10m, 2h); saved at the next re-basing of the time origin (HMC: between
+        /// segments). `dmd resume` continues the run.
+        #[arg(long, value_name = "EVENTS|TIME")]
+        checkpoint_every: Option<String>,
+        /// Threads for the jobs of a scene with `[chains]` or `[sweep]` (default: all cores).
+        /// Results do not depend on it.
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Stop right after the first checkpoint, as a crash would (tests of `dmd resume`).
+        #[arg(long, hide = true)]
+        halt_after_checkpoint: bool,
+    },
+    /// Continue a run from its checkpoint (written by `dmd run --checkpoint-every`), or finish
+    /// the chains or sweep whose output folder is given.
+    Resume {
+        /// The checkpoint file, or the output folder of a scene with `[chains]` or `[sweep]`.
+        checkpoint: PathBuf,
+        /// Output folder (default: the checkpoint's folder).
+        #[arg(long, short)]
+        out: Option<PathBuf>,
+        /// No progress bar and no summary on the terminal.
+        #[arg(long, short)]
+        quiet: bool,
+        /// Change the checkpoint interval (default: the saved one).
+        #[arg(long, value_name = "EVENTS|TIME")]
+        checkpoint_every: Option<String>,
+        /// Threads for the jobs of chains or a sweep (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
     },
     /// Read and check a scene (with overrides) without running it.
     Check {
@@ -68,6 +101,8 @@ impl Reporter for Bar {
         };
         let bar = ProgressBar::new(total);
         let unit = match length {
+            // HMC phases count segments (issue 9).
+            Stop::Events(_) if name.starts_with("hmc") => "segments",
             Stop::Events(_) => "events",
             Stop::Time(_) => "‰ of the time",
         };
@@ -145,6 +180,25 @@ fn print_summary(s: &Summary, out: &std::path::Path) {
     if let Some(d) = s.diffusion_vacf {
         println!("  diffusion (VACF) {d:.6}");
     }
+    if let Some(h) = &s.hmc {
+        println!(
+            "  hmc           {} τ = {}, {} segments, acceptance {:.4} (rejected: overlap {}, energy {}, non-finite {}), segments with a miss {}",
+            h.ensemble,
+            h.segment_time,
+            h.segments,
+            h.acceptance_rate,
+            h.rejected_by_cause.get("overlap").copied().unwrap_or(0),
+            h.rejected_by_cause.get("energy").copied().unwrap_or(0),
+            h.rejected_by_cause.get("non_finite").copied().unwrap_or(0),
+            h.segments_with_misses
+        );
+        println!(
+            "  chain U/N     {:.6} ± {:.6} (block averages), <exp(-βΔH)> {:.6}",
+            h.potential_energy_per_body.mean,
+            h.potential_energy_per_body.error,
+            h.exp_minus_beta_delta_h
+        );
+    }
     println!(
         "  wrote {}/summary.json{}",
         out.display(),
@@ -178,6 +232,9 @@ fn main() -> ExitCode {
             out,
             set,
             quiet,
+            checkpoint_every,
+            threads,
+            halt_after_checkpoint,
         } => {
             let (s, base) = match Scene::load(&scene, &set) {
                 Ok(x) => x,
@@ -186,14 +243,36 @@ fn main() -> ExitCode {
                     return ExitCode::from(2);
                 }
             };
+            let every = match checkpoint_every.as_deref().map(Every::parse).transpose() {
+                Ok(e) => e,
+                Err(e) => {
+                    eprintln!("dmd: --checkpoint-every: {e}");
+                    return ExitCode::from(2);
+                }
+            };
+            let source = SceneSource {
+                text: std::fs::read_to_string(&scene).unwrap_or_default(),
+                overrides: set,
+                base: base.clone(),
+                file: scene.clone(),
+            };
+            if s.chains.is_some() || s.sweep.is_some() {
+                return run_ensemble(&scene, &s, source, &out, every, threads, quiet);
+            }
+            let options = RunOptions {
+                checkpoint_every: every,
+                source: Some(source),
+                resume: None,
+                halt_after_checkpoint,
+            };
             let mut bar = Bar {
                 bar: None,
                 length: None,
             };
             let result = if quiet {
-                run_scene(&s, &base, Some(&out), &mut dmd_sim::run::Quiet)
+                run_scene_with(&s, &base, Some(&out), &mut dmd_sim::run::Quiet, &options)
             } else {
-                run_scene(&s, &base, Some(&out), &mut bar)
+                run_scene_with(&s, &base, Some(&out), &mut bar, &options)
             };
             match result {
                 Ok(summary) => {
@@ -208,5 +287,177 @@ fn main() -> ExitCode {
                 }
             }
         }
+        Command::Resume {
+            checkpoint,
+            out,
+            quiet,
+            checkpoint_every,
+            threads,
+        } => {
+            if checkpoint.is_dir() {
+                resume_ensemble(&checkpoint, threads, quiet)
+            } else {
+                resume(checkpoint, out, quiet, checkpoint_every)
+            }
+        }
     }
+}
+
+/// `dmd resume`: every check of the checkpoint passes before anything is written.
+fn resume(path: PathBuf, out: Option<PathBuf>, quiet: bool, every: Option<String>) -> ExitCode {
+    let every = match every.as_deref().map(Every::parse).transpose() {
+        Ok(e) => e,
+        Err(e) => {
+            eprintln!("dmd: --checkpoint-every: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    let c = match checkpoint::read(&path) {
+        Ok(c) => c,
+        Err(e) => {
+            eprintln!("dmd: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    let scene = match Scene::from_str_with(&c.source.text, &c.source.overrides) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!(
+                "dmd: checkpoint {}: its scene ({}) no longer reads: {e}",
+                path.display(),
+                c.source.file.display()
+            );
+            return ExitCode::from(2);
+        }
+    };
+    let out = out.unwrap_or_else(|| {
+        path.parent()
+            .map(std::path::Path::to_owned)
+            .filter(|p| !p.as_os_str().is_empty())
+            .unwrap_or_else(|| PathBuf::from("."))
+    });
+    let base = c.source.base.clone();
+    let options = RunOptions {
+        checkpoint_every: every,
+        source: None,
+        resume: Some((path.clone(), c)),
+        halt_after_checkpoint: false,
+    };
+    let mut bar = Bar {
+        bar: None,
+        length: None,
+    };
+    let result = if quiet {
+        run_scene_with(
+            &scene,
+            &base,
+            Some(&out),
+            &mut dmd_sim::run::Quiet,
+            &options,
+        )
+    } else {
+        run_scene_with(&scene, &base, Some(&out), &mut bar, &options)
+    };
+    match result {
+        Ok(summary) => {
+            if !quiet {
+                print_summary(&summary, &out);
+            }
+            ExitCode::SUCCESS
+        }
+        Err(e @ dmd_sim::run::RunError::Checkpoint(_)) => {
+            eprintln!("dmd: {e}");
+            ExitCode::from(2)
+        }
+        Err(e) => {
+            eprintln!("dmd: {}: {e}", path.display());
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// `dmd resume DIR` of chains or a sweep.
+fn resume_ensemble(dir: &std::path::Path, threads: Option<usize>, quiet: bool) -> ExitCode {
+    let done = |k: usize, n: usize| {
+        if !quiet {
+            eprintln!("dmd: {k} of {n} jobs done");
+        }
+    };
+    match dmd_sim::chains::resume_ensemble(dir, threads, &done) {
+        Ok(e) => {
+            if !quiet {
+                print_ensemble(&e, dir);
+            }
+            ExitCode::SUCCESS
+        }
+        Err(e @ dmd_sim::run::RunError::Checkpoint(_)) => {
+            eprintln!("dmd: {e}");
+            ExitCode::from(2)
+        }
+        Err(e) => {
+            eprintln!("dmd: {}: {e}", dir.display());
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// `dmd run` of a scene with `[chains]` or `[sweep]`: the jobs in parallel, then the
+/// aggregate.
+fn run_ensemble(
+    scene: &std::path::Path,
+    s: &Scene,
+    source: SceneSource,
+    out: &std::path::Path,
+    every: Option<Every>,
+    threads: Option<usize>,
+    quiet: bool,
+) -> ExitCode {
+    let done = |k: usize, n: usize| {
+        if !quiet {
+            eprintln!("dmd: {k} of {n} jobs done");
+        }
+    };
+    match dmd_sim::chains::run_ensemble(s, &source, out, threads, every, &done) {
+        Ok(e) => {
+            if !quiet {
+                print_ensemble(&e, out);
+            }
+            ExitCode::SUCCESS
+        }
+        Err(dmd_sim::run::RunError::Scene(e)) => {
+            eprintln!("dmd: {}: {e}", scene.display());
+            ExitCode::from(2)
+        }
+        Err(e) => {
+            eprintln!("dmd: {}: {e}", scene.display());
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn print_ensemble(e: &dmd_sim::chains::Ensemble, out: &std::path::Path) {
+    println!(
+        "dmd: {} point(s) × {} chain(s){}",
+        e.points.len(),
+        e.chains,
+        e.key
+            .as_ref()
+            .map(|k| format!(", sweep over {k}"))
+            .unwrap_or_default()
+    );
+    for p in &e.points {
+        if let Some(v) = &p.value {
+            println!("  {} = {v}", e.key.as_deref().unwrap_or("value"));
+        }
+        for (name, q) in &p.quantities {
+            match q.error {
+                Some(err) => println!("    {name:<36} {:.6} ± {err:.6}", q.mean),
+                None => println!("    {name:<36} {:.6}", q.mean),
+            }
+        }
+    }
+    println!(
+        "  wrote {}/ensemble.json, ensemble.csv and one folder per job",
+        out.display()
+    );
 }
