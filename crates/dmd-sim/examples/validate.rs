@@ -721,6 +721,7 @@ fn physics(s: &Summary) -> String {
             "events_per_second",
             "events_per_cpu_second",
             "pair_events_per_second",
+            "pair_events_per_cpu_second",
             "queue",
             "queue_pushed",
             "queue_stale_dropped",
