@@ -114,7 +114,7 @@ impl Plan {
                     let t = p.terraces.as_ref().expect("checked");
                     let none: Option<&NoProfile> = None;
                     let map = terrace_map(k, &gb, none, t, kt, scale)?;
-                    let terraces = PairTerraces::new(gb, map).map_err(|e| {
+                    let terraces = PairTerraces::with_outer_reach(gb, map).map_err(|e| {
                         SceneError::invalid(format!("pair[{k}].terraces"), e.to_string())
                     })?;
                     tables.push(((index(&p.species[0]), index(&p.species[1])), terraces));
