@@ -2,7 +2,7 @@
 //! rods (003 Eq. 7), and the search settings and initial rotation of the rods.
 //!
 //! Lennard-Jones spheres on terraces need no root search: their terraces are radial steps with
-//! analytic event times ([`radial_steps`](crate::terraced::radial_steps)), so they run on the
+//! analytic event times ([`terraced::radial_steps`](crate::terraced::radial_steps)), so they run on the
 //! stepped path. Only potentials that depend on orientations (the rods of 003 Eqs. 22–23 with
 //! `ζ > 0`, Gay–Berne) build a [`Terraced`](crate::terraced::Terraced) model.
 
