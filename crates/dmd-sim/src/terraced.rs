@@ -1162,6 +1162,58 @@ mod tests {
         }
     }
 
+    /// The stored value of the zero terrace is 0 (not stored), every terrace round-trips, and
+    /// each band's reach covers both of its levels and never exceeds the outermost reach.
+    #[test]
+    fn terrace_storage_and_band_reaches() {
+        let rod = potential::LjRod::new(1.0, 1.0, 0.3).unwrap();
+        let map =
+            TerraceMap::evenly_spaced(&rod, 0.3, &potential::TerraceOptions::default()).unwrap();
+        let pt = PairTerraces::new(rod, map).unwrap();
+        assert_eq!(pt.stored(pt.zero), 0);
+        for k in 0..pt.terraces {
+            assert_eq!(pt.terrace(pt.stored(k)), k);
+        }
+        for (k, b) in pt.bands.iter().enumerate() {
+            assert!(b.reach <= pt.reach * (1.0 + 1e-12), "terrace {k}");
+            for level in [b.lo, b.hi] {
+                if level.is_finite() {
+                    assert!(
+                        rod.reach(level).unwrap() <= b.reach,
+                        "terrace {k}, level {level}"
+                    );
+                }
+            }
+        }
+        // The zero terrace's reach is the outermost one (003 Eq. 25 for the rods).
+        assert_eq!(pt.bands[pt.zero as usize].reach, pt.reach);
+        let outer = PairTerraces::with_outer_reach(rod, pt.map.clone()).unwrap();
+        assert!(outer.bands.iter().all(|b| b.reach == pt.reach));
+    }
+
+    /// Lennard-Jones terraces as radial steps: the energy at any distance is the terrace of
+    /// U there, far pairs at 0, a hard core where U reaches the core.
+    #[test]
+    fn radial_steps_reproduce_the_terraces() {
+        let lj = potential::LennardJones::new(1.0, 1.0).unwrap();
+        let map =
+            TerraceMap::evenly_spaced(&lj, 0.3, &potential::TerraceOptions::default()).unwrap();
+        let prof = potential::profile::lennard_jones(&lj).unwrap();
+        let steps = radial_steps(&prof, &map).unwrap();
+        let stepped = crate::potential::StepPotential::new(&steps);
+        assert_eq!(stepped.core(), Some(steps[0][0]));
+        for k in 1..400 {
+            let r = 0.9 + 2.0 * f64::from(k) / 400.0;
+            let u = lj.energy_at(r);
+            let expected = map.value(u);
+            assert!(
+                (stepped.energy_at(r) - expected).abs() < 1e-12,
+                "r = {r}: {} vs {expected}",
+                stepped.energy_at(r)
+            );
+        }
+    }
+
     #[test]
     fn bands_watch_both_levels() {
         let b = Band {
