@@ -1,13 +1,19 @@
-//! `dmd-sim`: an event-driven ("discontinuous") molecular dynamics simulator for spheres.
+//! `dmd-sim`: an event-driven ("discontinuous") molecular dynamics simulator for spheres and
+//! rigid rods.
 //!
 //! Bodies move freely and exactly between events; at an event a pair reaches a step of its
 //! stepped radial potential (a hard core, the edge of a square well, a terrace of a stepped
 //! Lennard-Jones potential) and the impulse rule of [`collide`] changes their velocities. The
-//! event loop ([`simulation::Simulation`]) keeps a local clock per body, a cell list with
-//! analytic cell-crossing events, the level of every interacting pair, and its pending events
-//! in per-body lists, with each body's earliest in an `event_queue` scheduler and lazy
-//! invalidation at both levels; event times are analytic (a quadratic per
-//! boundary), and the time origin is re-based periodically.
+//! event loop ([`simulation::Simulation`]) keeps a local clock per body, neighbour lists built on
+//! cells, the level of every interacting pair, and its pending events in per-body lists, with
+//! each body's earliest in an `event_queue` scheduler and lazy invalidation at both levels;
+//! event times of spheres are analytic (a quadratic per boundary), and the time origin is
+//! re-based periodically.
+//!
+//! Rigid rods ([`terraced`], seed 003) interact through a smooth orientation-dependent pair
+//! potential mapped onto energy terraces; they rotate exactly between events, their event times
+//! are found by root searches with virtual events, and the impulse follows the smooth force and
+//! torques.
 //!
 //! The `dmd` command runs a scene file ([`scene`], documented key by key in
 //! `docs/USER-GUIDE.md`) and writes `summary.json`, observables and trajectories

@@ -2,7 +2,8 @@
 //! rods (003 Eq. 7), and the search settings and initial rotation of the rods.
 //!
 //! Lennard-Jones spheres on terraces need no root search: their terraces are radial steps with
-//! analytic event times ([`radial_steps`]), so they run on the stepped path. Only potentials that depend on orientations (the rods of 003 Eqs. 22–23 with
+//! analytic event times ([`terraced::radial_steps`](crate::terraced::radial_steps)), so they run on the
+//! stepped path. Only potentials that depend on orientations (the rods of 003 Eqs. 22–23 with
 //! `ζ > 0`, Gay–Berne) build a [`Terraced`](crate::terraced::Terraced) model.
 
 use glam::DVec3;
@@ -113,7 +114,7 @@ impl Plan {
                     let t = p.terraces.as_ref().expect("checked");
                     let none: Option<&NoProfile> = None;
                     let map = terrace_map(k, &gb, none, t, kt, scale)?;
-                    let terraces = PairTerraces::new(gb, map).map_err(|e| {
+                    let terraces = PairTerraces::with_outer_reach(gb, map).map_err(|e| {
                         SceneError::invalid(format!("pair[{k}].terraces"), e.to_string())
                     })?;
                     tables.push(((index(&p.species[0]), index(&p.species[1])), terraces));

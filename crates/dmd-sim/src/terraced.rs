@@ -254,21 +254,41 @@ pub enum ModelError {
 }
 
 impl<P: PairPotential> PairTerraces<P> {
-    /// The terraces of `map` on `potential`, with the reach of every band.
+    /// The terraces of `map` on `potential`, with the reach of every band (so that a pair
+    /// deep in the well is bracketed by the reach of its own terrace's levels).
     ///
     /// # Errors
     /// [`ModelError::Reach`], [`ModelError::TooManyTerraces`].
     pub fn new(potential: P, map: TerraceMap) -> Result<Self, ModelError> {
+        Self::build(potential, map, true)
+    }
+
+    /// As [`new`](Self::new), but every band bracketed by the outermost reach: two reaches
+    /// instead of one per level, for potentials whose reach is found numerically (Gay–Berne:
+    /// about 0.1 s per level); the brackets of inner terraces are looser, the events the same.
+    ///
+    /// # Errors
+    /// As [`new`](Self::new).
+    pub fn with_outer_reach(potential: P, map: TerraceMap) -> Result<Self, ModelError> {
+        Self::build(potential, map, false)
+    }
+
+    fn build(potential: P, map: TerraceMap, per_level: bool) -> Result<Self, ModelError> {
         let n = map.terraces();
         if n > MAX_TERRACES {
             return Err(ModelError::TooManyTerraces(n));
         }
         let levels = map.levels().to_vec();
         let core = map.core();
+        let outer = map.reach(&potential).map_err(ModelError::Reach)? * (1.0 + 1e-12);
         // Reach of every level, and of the core; a tiny pad covers round-off of the bracket.
         let mut level_reach = Vec::with_capacity(levels.len() + 1);
         for &u in levels.iter().chain(std::iter::once(&core)) {
-            level_reach.push(potential.reach(u).map_err(ModelError::Reach)? * (1.0 + 1e-12));
+            level_reach.push(if per_level {
+                potential.reach(u).map_err(ModelError::Reach)? * (1.0 + 1e-12)
+            } else {
+                outer
+            });
         }
         let energies = map.energies();
         let bands: Vec<Band> = (0..n)
@@ -300,7 +320,7 @@ impl<P: PairPotential> PairTerraces<P> {
                 }
             })
             .collect();
-        let reach = map.reach(&potential).map_err(ModelError::Reach)? * (1.0 + 1e-12);
+        let reach = outer;
         Ok(PairTerraces {
             clamp: 1e3 * core.abs().max(1.0),
             potential,
@@ -1312,6 +1332,58 @@ mod tests {
                     prop_assert!((closest - radius).abs() < 1e-7, "{x:?} vs {y:?}");
                 }
             }
+        }
+    }
+
+    /// The stored value of the zero terrace is 0 (not stored), every terrace round-trips, and
+    /// each band's reach covers both of its levels and never exceeds the outermost reach.
+    #[test]
+    fn terrace_storage_and_band_reaches() {
+        let rod = potential::LjRod::new(1.0, 1.0, 0.3).unwrap();
+        let map =
+            TerraceMap::evenly_spaced(&rod, 0.3, &potential::TerraceOptions::default()).unwrap();
+        let pt = PairTerraces::new(rod, map).unwrap();
+        assert_eq!(pt.stored(pt.zero), 0);
+        for k in 0..pt.terraces {
+            assert_eq!(pt.terrace(pt.stored(k)), k);
+        }
+        for (k, b) in pt.bands.iter().enumerate() {
+            assert!(b.reach <= pt.reach * (1.0 + 1e-12), "terrace {k}");
+            for level in [b.lo, b.hi] {
+                if level.is_finite() {
+                    assert!(
+                        rod.reach(level).unwrap() <= b.reach,
+                        "terrace {k}, level {level}"
+                    );
+                }
+            }
+        }
+        // The zero terrace's reach is the outermost one (003 Eq. 25 for the rods).
+        assert_eq!(pt.bands[pt.zero as usize].reach, pt.reach);
+        let outer = PairTerraces::with_outer_reach(rod, pt.map.clone()).unwrap();
+        assert!(outer.bands.iter().all(|b| b.reach == pt.reach));
+    }
+
+    /// Lennard-Jones terraces as radial steps: the energy at any distance is the terrace of
+    /// U there, far pairs at 0, a hard core where U reaches the core.
+    #[test]
+    fn radial_steps_reproduce_the_terraces() {
+        let lj = potential::LennardJones::new(1.0, 1.0).unwrap();
+        let map =
+            TerraceMap::evenly_spaced(&lj, 0.3, &potential::TerraceOptions::default()).unwrap();
+        let prof = potential::profile::lennard_jones(&lj).unwrap();
+        let steps = radial_steps(&prof, &map).unwrap();
+        let stepped = crate::potential::StepPotential::new(&steps);
+        assert_eq!(stepped.core(), Some(steps[0][0]));
+        for k in 1..400 {
+            let r = 0.9 + 2.0 * f64::from(k) / 400.0;
+            let u = lj.energy_at(r);
+            let expected = map.value(u);
+            assert!(
+                (stepped.energy_at(r) - expected).abs() < 1e-12,
+                "r = {r}: {} vs {expected}",
+                stepped.energy_at(r)
+            );
         }
     }
 
