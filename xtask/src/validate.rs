@@ -65,11 +65,19 @@ pub(crate) const CHECKS: &[Check] = &[
     },
     Check {
         name: "dmd-sim-rods",
-        title: "Rigid rods on terraced potentials: conservation, events per ps against the paper, missed events against cost, terrace rules, extreme cases",
+        title: "Rigid rods on terraced potentials: conservation, events per ps against the paper, structure and dynamics, extreme cases",
         package: "dmd-sim",
         example: "validate_rods",
-        full: &[],
-        quick: &["--quick"],
+        full: &["--part", "physics"],
+        quick: &["--part", "physics", "--quick"],
+    },
+    Check {
+        name: "dmd-sim-rods-cost",
+        title: "Rigid rods: error against run time (missed events against search settings, terrace step and rules)",
+        package: "dmd-sim",
+        example: "validate_rods",
+        full: &["--part", "cost"],
+        quick: &["--part", "cost", "--quick"],
     },
     Check {
         name: "sites",
