@@ -4,8 +4,10 @@
 //! every variant alike).
 //!
 //! ```sh
-//! cargo run --release -p dmd-sim --example rods_speed -- [--repeats 3] [--time 4] [--gas-time 100]
+//! cargo run --release -p dmd-sim --example rods_speed -- [--repeats 3] [--time 4] [--gas-time 100] [--n 512]
 //! ```
+//!
+//! `--n` scales the paper's scene to another number of rods at the same density (the gas too).
 //!
 //! Each variant runs `repeats` times (seeds 1, 2, …) after its own equilibration; the table
 //! gives medians of pair events (crossings and reflections) and of all events (with virtual
@@ -23,6 +25,7 @@ fn main() {
     let mut repeats = 3;
     let mut time = 4.0;
     let mut gas_time = 100.0;
+    let mut n = 512u64;
     let mut it = std::env::args().skip(1);
     while let Some(a) = it.next() {
         let v = it.next().unwrap_or_default();
@@ -30,6 +33,7 @@ fn main() {
             "--repeats" => repeats = v.parse().expect("--repeats N"),
             "--time" => time = v.parse().expect("--time PS"),
             "--gas-time" => gas_time = v.parse().expect("--gas-time PS"),
+            "--n" => n = v.parse().expect("--n RODS"),
             _ => panic!("unknown argument {a}"),
         }
     }
@@ -94,6 +98,10 @@ fn main() {
                 if *state == "gas" { 10.0 } else { 2.0 }
             ));
             o.push(format!("seed={}", r + 1));
+            o.push(format!("species.0.count={n}"));
+            if (n as f64).cbrt().fract() != 0.0 {
+                o.push("init.positions=fcc".to_owned());
+            }
             let s = run(&o);
             let pe = (s.terrace_crossings + s.reflections) as f64;
             results[k].push((pe / s.cpu_seconds, s.events_per_cpu_second, s.events_per_ps));

@@ -295,11 +295,15 @@ fn rates(args: &Args, r: &mut Report, w: &mut String) -> Result<(), String> {
         "The paper: about 4.7·10⁴ events per ps at ΔV = kT/2, and about 3.5·10⁴ for ΔV between \
          kT and 2kT. Ours: pair events (crossings and reflections) per ps of production, after \
          equilibration with an Andersen thermostat at 505 K. The paper's levels are \
-         `U_k = (k − ½)ΔV`; the well is ε = 3 kJ/mol = kT/1.4 deep, so once ΔV > 2ε (1.43 kT) \
-         no level lies between the minimum and zero: the whole well is one terrace with \
-         V = 0, the rods feel only the repulsive terraces, and pairs stop crossing in and out \
-         of the well. Check: within 20 % of the paper where the paper's rule has a level in the \
-         well; the rows beyond 1.43 kT are reported, not checked.\n\n\
+         `U_k = (k − ½)ΔV`; the well is ε = 3 kJ/mol = kT/1.4 deep, so from ΔV = kT on a single \
+         level, −ΔV/2, lies in the well, and it sinks towards the minimum as ΔV grows: at 1.4 kT \
+         it is 0.06 kJ/mol above it, the bottom terrace is a sliver (003 §V warns against \
+         terraces of zero width) and pairs cross it in and out ever more often. Beyond \
+         ΔV = 2ε = 1.43 kT no level is left in the well: the whole well is one terrace with \
+         V = 0, the rods feel only the repulsive terraces, and the rate falls. The paper's \
+         statement of a constant 3.5·10⁴ between kT and 2kT therefore does not follow from its \
+         stated rule; which placement it used there we cannot tell. Check: within 20 % of the \
+         paper at ΔV = kT/2 and kT; the other rows are reported.\n\n\
          | ΔV / kT | levels in the well | events per ps | paper | ratio | virtual per pair event | T (K) | pair events per CPU s | all events per CPU s | check |\n\
          |---|---|---|---|---|---|---|---|---|---|"
     )
@@ -323,10 +327,10 @@ fn rates(args: &Args, r: &mut Report, w: &mut String) -> Result<(), String> {
         let paper = if dv < 0.75 { 4.7e4 } else { 3.5e4 };
         let ratio = sum.events_per_ps / paper;
         let in_well = negative_levels(dv);
-        let verdict = if in_well > 0 {
+        let verdict = if dv <= 1.0 {
             r.check((ratio - 1.0).abs() < 0.2 && sum.anomalies == 0)
         } else {
-            "not checked"
+            "reported"
         };
         writeln!(
             w,
