@@ -822,6 +822,11 @@ fn check_checkpoint_scene(
     // The stage must be one this scene has (a hand-edited or foreign file must not reach a
     // broken invariant of the driver).
     let hmc = scene.hmc.is_some();
+    if let Stage::Equilibration(Left::Time(t)) | Stage::Production(Left::Time(t)) = c.stage
+        && !(t.is_finite() && t >= 0.0)
+    {
+        return Err(bad(format!("the time left of its phase is {t}")));
+    }
     let fits = match c.stage {
         Stage::Equilibration(Left::Segments(_)) | Stage::Production(Left::Segments(_)) => hmc,
         Stage::Production(_) => !hmc,
