@@ -978,6 +978,34 @@ fn check_checkpoint_scene(
             )));
         }
     }
+    // The stage must be one this scene has (a hand-edited or foreign file must not reach a
+    // broken invariant of the driver).
+    let hmc = scene.hmc.is_some();
+    if let Stage::Equilibration(Left::Time(t)) | Stage::Production(Left::Time(t)) = c.stage
+        && !(t.is_finite() && t >= 0.0)
+    {
+        return Err(bad(format!("the time left of its phase is {t}")));
+    }
+    let fits = match c.stage {
+        Stage::Equilibration(Left::Segments(_)) | Stage::Production(Left::Segments(_)) => hmc,
+        Stage::Production(_) => !hmc,
+        Stage::Equilibration(_) => true,
+    };
+    if !fits {
+        return Err(bad(format!(
+            "its stage {:?} does not belong to a scene {} [hmc]",
+            c.stage,
+            if hmc { "with" } else { "without" }
+        )));
+    }
+    if hmc != c.chain.is_some() {
+        return Err(bad("its HMC chain does not match the scene's [hmc]".into()));
+    }
+    if matches!(c.stage, Stage::Production(_)) && c.record.start.is_none() {
+        return Err(bad(
+            "it is in production but has no record of its start".into()
+        ));
+    }
     Ok(())
 }
 

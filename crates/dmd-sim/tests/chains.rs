@@ -25,7 +25,7 @@ temperature = 1.5
 equilibration_events = 3000
 [hmc]
 segment_time = 0.5
-segments = 150
+segments = 100
 [chains]
 count = 4
 [sweep]

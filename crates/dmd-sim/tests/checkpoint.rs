@@ -328,6 +328,33 @@ fn damaged_checkpoints_get_clear_errors_and_overwrite_nothing() {
         "{err}"
     );
     assert_eq!(std::fs::read(d.join("summary.json")).unwrap(), good);
+    // A stage its scene does not have, and a chain missing: refused, no panic.
+    for (name, bad) in [
+        ("stage", {
+            let mut b = c.clone();
+            b.stage = checkpoint::Stage::Production(checkpoint::Left::Events(10));
+            b
+        }),
+        ("chain", {
+            let mut b = c.clone();
+            b.chain = None;
+            b
+        }),
+    ] {
+        let path = d.join(format!("misfit-{name}.dmd"));
+        std::fs::write(&path, checkpoint::encode_with_version(&bad, CODE_VERSION)).unwrap();
+        let o = Command::new(exe)
+            .args(["resume", "--quiet"])
+            .arg(&path)
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(2), "{name}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            err.contains("the saved state does not fit the scene"),
+            "{err}"
+        );
+    }
     assert!(matches!(
         checkpoint::decode(&bytes[..20]),
         Err(Problem::Truncated { .. })

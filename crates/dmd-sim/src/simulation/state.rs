@@ -614,6 +614,15 @@ fn check_fits<M: PairModel>(
     if s.bodies.len() != n {
         return bad(format!("it has {} bodies, the scene {n}", s.bodies.len()));
     }
+    let (a, b, c, d) = s.timers;
+    if [a, b, c, d].iter().any(|t| t.is_nan())
+        || s.sample_dt.is_some_and(|x| !(x.is_finite() && x > 0.0))
+        || s.frame_dt.is_some_and(|x| !(x.is_finite() && x > 0.0))
+        || !(s.now.is_finite() && s.kinetic.is_finite() && s.potential.is_finite())
+        || s.settings.0 == 0
+    {
+        return bad("its timers, energies or settings are not valid numbers".into());
+    }
     if s.settings.3 != skin {
         return bad(format!(
             "its neighbour-list skin is {}, the simulation's {skin}",
