@@ -593,37 +593,51 @@ fn terraces(args: &Args, r: &mut Report, w: &mut String, work: &Path) -> Result<
     }
     writeln!(w, "\nExtrapolated U₀/N = {u0:.4} kJ/mol.\n").ok();
 
-    // Placement and step-energy rules at ΔV = kT (equal level counts).
+    // Placement and step-energy rules at ΔV = kT/4 (three levels in the well), at the paper's
+    // level count; then the outermost level moved towards zero (the same count, so the other
+    // levels spread out).
     let mut rule_pts = Vec::new();
     if !q {
         writeln!(
             w,
-            "Rules at the paper's level count for ΔV = kT (the same outermost level, so the \
-             same reach):\n\n\
-             | placement | terrace energies | U/N (kJ/mol) | P (bar) | pair events per ps | CPU s per ps | abs(U/N − U₀) |\n|---|---|---|---|---|---|---|"
+            "Rules at the paper's level count for ΔV = kT/4 (three levels in the well; the same \
+             outermost level −ΔV/2, so the same reach, unless `outermost` moves it):\n\n\
+             | placement | terrace energies | outermost (kJ/mol) | U/N (kJ/mol) | P (bar) | pair events per ps | CPU s per ps | abs(U/N − U₀) |\n|---|---|---|---|---|---|---|---|"
         )
         .ok();
+        let mut rules: Vec<(&str, &str, Option<f64>)> = Vec::new();
         for placement in ["equal-energy", "equal-distance", "equal-volume"] {
             for energy in ["equal", "midpoint", "volume-average", "virial"] {
-                let sum = run(
-                    PAPER,
-                    &quiet_paper(&base(&[
-                        "pair.0.terraces.step_kt=1".to_owned(),
-                        format!("pair.0.terraces.placement={placement}"),
-                        format!("pair.0.terraces.step_energy={energy}"),
-                    ])),
-                    None,
-                )?;
-                let err = (sum.potential_energy_per_body - u0).abs();
-                let cpu_per_ps = sum.cpu_seconds / sum.sim_time;
-                writeln!(
-                    w,
-                    "| {placement} | {energy} | {:.4} | {:.0} | {:.3e} | {:.3} | {:.4} |",
-                    sum.potential_energy_per_body, sum.pressure, sum.events_per_ps, cpu_per_ps, err
-                )
-                .ok();
-                rule_pts.push((cpu_per_ps, err.max(1e-4)));
+                rules.push((placement, energy, None));
             }
+        }
+        for energy in ["equal", "midpoint", "virial"] {
+            rules.push(("equal-energy", energy, Some(-0.1)));
+        }
+        for (placement, energy, outermost) in rules {
+            let mut o = vec![
+                "pair.0.terraces.step_kt=0.25".to_owned(),
+                format!("pair.0.terraces.placement={placement}"),
+                format!("pair.0.terraces.step_energy={energy}"),
+            ];
+            if let Some(x) = outermost {
+                o.push(format!("pair.0.terraces.outermost={x}"));
+            }
+            let sum = run(PAPER, &quiet_paper(&base(&o)), None)?;
+            let err = (sum.potential_energy_per_body - u0).abs();
+            let cpu_per_ps = sum.cpu_seconds / sum.sim_time;
+            writeln!(
+                w,
+                "| {placement} | {energy} | {} | {:.4} | {:.0} | {:.3e} | {:.3} | {:.4} |",
+                outermost.map_or("−ΔV/2".to_owned(), |x| format!("{x}")),
+                sum.potential_energy_per_body,
+                sum.pressure,
+                sum.events_per_ps,
+                cpu_per_ps,
+                err
+            )
+            .ok();
+            rule_pts.push((cpu_per_ps, err.max(1e-4)));
         }
         writeln!(w).ok();
     }
@@ -639,7 +653,7 @@ fn terraces(args: &Args, r: &mut Report, w: &mut String, work: &Path) -> Result<
                 points: pts,
             },
             Curve {
-                label: "placement and energy rules, ΔV = kT",
+                label: "placement, energy and outermost-level rules, ΔV = kT/4",
                 points: rule_pts,
             },
         ],

@@ -1548,21 +1548,24 @@ fn check_terraces(k: usize, p: &PotentialSpec, t: &TerraceSpec) -> Result<(), Sc
                 format!("must be a negative energy (the outermost level below zero), got {o}"),
             ));
         }
-        if t.placement == PlacementSpec::EqualEnergy && t.step_energy == StepEnergySpec::Equal {
+        if t.levels.is_some() {
             return Err(SceneError::invalid(
                 key("outermost"),
-                "moves the outermost level of a placement rule: give `placement` or \
-                 `step_energy` too",
+                "moves the outermost of the levels `step` or `step_kt` makes: not used with \
+                 explicit `levels`",
             ));
         }
     }
-    let needs_profile =
-        t.placement != PlacementSpec::EqualEnergy || t.step_energy != StepEnergySpec::Equal;
+    let needs_profile = t.placement != PlacementSpec::EqualEnergy
+        || t.step_energy != StepEnergySpec::Equal
+        || t.outermost.is_some();
     if needs_profile && matches!(p, PotentialSpec::GayBerne { .. }) {
         let which = if t.placement != PlacementSpec::EqualEnergy {
             "placement"
-        } else {
+        } else if t.step_energy != StepEnergySpec::Equal {
             "step_energy"
+        } else {
+            "outermost"
         };
         return Err(SceneError::invalid(
             key(which),

@@ -24,10 +24,12 @@
 //! indicator of 003 Eq. 8), negative outside; its derivative follows from `U̇` (003 Eq. 12) at the
 //! cost of a multiplication, so both levels are watched for the price of one search. The search
 //! asks for a falling crossing of `g` and is bracketed by the times the centres spend within the
-//! band's reach (`root_search::sphere_window`; the reach of the outermost levels is 003 Eq. 25
-//! for the rods). A pair not yet within reach gets a virtual event at the moment it enters
-//! (nothing is evaluated before), and a search that reaches the end of its window gets one at
-//! its last sample, from which it resumes if neither body has changed by then.
+//! band's reach (the forms of `root_search::sphere_window`; the reach of the outermost levels is
+//! 003 Eq. 25 for the rods). Each call's step is also limited by the speed of `U` at its first
+//! sample ([`SearchSettings::max_change`]). A pair not yet within reach gets a virtual event at
+//! the moment it enters (nothing is evaluated before), and a search that reaches the end of its
+//! window gets one at its last sample, from which it resumes if neither body has changed by
+//! then.
 //!
 //! **Impulses.** At the event the force and torques of the smooth potential give the direction
 //! of the impulse and `collide::terrace` (003 Eq. 21) its size; the pair crosses to the next
@@ -81,10 +83,11 @@ pub struct SearchSettings {
     /// Validation mode: every search interval is searched again on a uniform grid of this
     /// spacing that examines every extremum (`None`: off).
     pub verify_step: Option<f64>,
-    /// Adaptive only: each step is also limited so that the linear prediction of `g` changes by
-    /// at most this fraction of the terrace's width (`Adaptive::with_max_change`): steps follow
-    /// the speed of `U`, so an excursion across a level and back within one maximum step is
-    /// still sampled. `+∞`: off.
+    /// Each call's maximum step is also at most this fraction of the terrace's width divided
+    /// by `|U̇|` at the call's first sample (never below 1 % of `max_step`): steps follow the
+    /// speed of `U`, so an excursion across a level and back within one maximum step is still
+    /// sampled. (The indicator's own slope cannot size the step: it vanishes mid-terrace.)
+    /// `+∞`: off, the paper's search.
     pub max_change: f64,
 }
 
