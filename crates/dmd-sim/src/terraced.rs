@@ -397,7 +397,7 @@ pub struct Terraced<P> {
     body_species: Vec<u32>,
     rods: Vec<Rod>,
     states: PairStates,
-    pending: Vec<Vec<(u32, Pending)>>,
+    pending: Vec<Vec<(u32, f64, Pending)>>,
     settings: SearchSettings,
     adaptive: Adaptive,
     verify: Option<Grid>,
@@ -562,18 +562,26 @@ impl<P: PairPotential> Terraced<P> {
         self.pair(si, sj).potential.energy(&g)
     }
 
-    fn set_pending(&mut self, i: u32, j: u32, what: Pending) {
+    /// Saves what the virtual event of `(i, j)` at `at` (as the loop computes it, `now + dt`)
+    /// will continue. The loop may hold two current events of one pair: a pair that left the
+    /// neighbour list and came back without either body changing is predicted again while its
+    /// first event is still scheduled. The time tells them apart, so the stale one, when due,
+    /// finds nothing instead of consuming the saved search of the live one.
+    fn set_pending(&mut self, i: u32, j: u32, at: f64, what: Pending) {
         let list = &mut self.pending[i as usize];
-        match list.iter_mut().find(|(p, _)| *p == j) {
-            Some(e) => e.1 = what,
-            None => list.push((j, what)),
+        match list.iter_mut().find(|(p, _, _)| *p == j) {
+            Some(e) => {
+                e.1 = at;
+                e.2 = what;
+            }
+            None => list.push((j, at, what)),
         }
     }
 
-    fn take_pending(&mut self, i: u32, j: u32) -> Option<Pending> {
+    fn take_pending(&mut self, i: u32, j: u32, now: f64) -> Option<Pending> {
         let list = &mut self.pending[i as usize];
-        let k = list.iter().position(|(p, _)| *p == j)?;
-        Some(list.swap_remove(k).1)
+        let k = list.iter().position(|(p, at, _)| *p == j && *at == now)?;
+        Some(list.swap_remove(k).2)
     }
 
     /// Runs (or continues) the search of pair `(i, j)` on terrace `k` from `from`.
@@ -739,8 +747,9 @@ impl<P: PairPotential> Terraced<P> {
                 self.stats.suspended += 1;
                 // The last sample is the state's (the search never samples past it).
                 let udot = if last.0 == s.time() { last.1 } else { f64::NAN };
-                self.set_pending(i, j, Pending::Resume(s, udot));
-                Some((s.time() - now, Kind::Virtual))
+                let dt = s.time() - now;
+                self.set_pending(i, j, now + dt, Pending::Resume(s, udot));
+                Some((dt, Kind::Virtual))
             }
             root_search::Outcome::NoRoot => None,
         }
@@ -813,8 +822,9 @@ impl<P: PairPotential> PairModel for Terraced<P> {
         if start > now {
             // Not yet within reach: start searching when the pair gets there.
             self.stats.deferred += 1;
-            self.set_pending(i, j, Pending::Start { at: start, end });
-            return Some((start - now, Kind::Virtual));
+            let dt = start - now;
+            self.set_pending(i, j, now + dt, Pending::Start { at: start, end });
+            return Some((dt, Kind::Virtual));
         }
         self.search(
             i,
@@ -839,7 +849,7 @@ impl<P: PairPotential> PairModel for Terraced<P> {
         dr: DVec3,
         dv: DVec3,
     ) -> Option<(f64, Kind)> {
-        let from = self.take_pending(i, j)?;
+        let from = self.take_pending(i, j, now)?;
         let pt = self.pair(si, sj);
         let k = pt.terrace(self.states.get(i, j));
         self.search(i, j, si, sj, k, now, dr, dv, from)
@@ -1388,6 +1398,58 @@ mod tests {
                 stepped.energy_at(r)
             );
         }
+    }
+
+    /// Two current events of one pair (a pair that left the neighbour list and came back with
+    /// neither body changing is predicted again): the stale one finds nothing when due, and
+    /// the live one resumes its own saved search. Untagged, the stale event consumed the live
+    /// one's saved state and continued it from the wrong time.
+    #[test]
+    fn a_stale_virtual_event_does_not_consume_the_live_ones_search() {
+        let rod = potential::LjRod::new(1.0, 1.0, 0.3).unwrap();
+        let map =
+            TerraceMap::evenly_spaced(&rod, 0.3, &potential::TerraceOptions::default()).unwrap();
+        let axes = [DVec3::X, DVec3::Y];
+        let omegas = [DVec3::new(0.0, 0.0, 1.0), DVec3::new(1.0, 0.0, 0.0)];
+        let species = RodSpecies {
+            mass: 1.0,
+            inertia: 0.1,
+        };
+        let mut settings = SearchSettings::paper(0.01);
+        settings.jitter = 0.0;
+        let mut model = Terraced::new(
+            vec![species],
+            vec![((0, 0), PairTerraces::new(rod, map).unwrap())],
+            &[0, 0],
+            &axes,
+            &omegas,
+            0.0,
+            settings,
+            1,
+        )
+        .unwrap();
+        // Well within reach, slowly approaching: every call stops at its window.
+        let (dr, dv) = (DVec3::new(1.6, 0.1, 0.0), DVec3::new(-0.05, 0.0, 0.0));
+        let (dt1, k1) = model.predict(0, 1, 0, 0, 0.0, dr, dv).unwrap();
+        assert_eq!(k1, Kind::Virtual);
+        let later = 0.25 * dt1;
+        let (dt2, k2) = model
+            .predict(0, 1, 0, 0, later, dr + dv * later, dv)
+            .unwrap();
+        assert_eq!(k2, Kind::Virtual);
+        let (t1, t2) = (dt1, later + dt2);
+        assert!(t2 > t1, "{t1} {t2}");
+        // The stale event is due first: nothing to continue.
+        assert_eq!(model.resume(0, 1, 0, 0, t1, dr + dv * t1, dv), None);
+        // The live one continues its search from where the second call stopped.
+        let (dt3, _) = model
+            .resume(0, 1, 0, 0, t2, dr + dv * t2, dv)
+            .expect("the live virtual event resumes its search");
+        assert!(dt3 > 0.0);
+        // Taken once: the same event cannot be resumed twice.
+        let t3 = t2 + dt3;
+        assert_eq!(model.resume(0, 1, 0, 0, t2, dr + dv * t2, dv), None);
+        assert!(model.resume(0, 1, 0, 0, t3, dr + dv * t3, dv).is_some());
     }
 
     #[test]
