@@ -52,6 +52,9 @@ pub enum RunError {
     /// A checkpoint cannot be resumed (issue 9).
     #[error(transparent)]
     Checkpoint(#[from] CheckpointError),
+    /// The standard-MD engine could not go on (issue 8).
+    #[error("smd: {0}")]
+    Smd(#[from] smd::SmdError),
     /// Stopped after a checkpoint, as [`RunOptions::halt_after_checkpoint`] asked.
     #[error("halted after writing a checkpoint, as asked")]
     Halted,
@@ -237,6 +240,14 @@ pub fn run_scene_with(
     reporter: &mut dyn Reporter,
     options: &RunOptions,
 ) -> Result<Summary, RunError> {
+    if scene.engine == crate::smd_engine::Engine::Smd {
+        // Issue 8: never run an smd scene event-driven behind the caller's back.
+        return Err(SceneError::invalid(
+            "engine",
+            "this scene asks for the smd engine: run it with smd_engine::run (as `dmd run` does)",
+        )
+        .into());
+    }
     let units = Units::of(scene.units);
     let scene = &scene.internal();
     let plan = Plan::of(scene)?;
@@ -1214,7 +1225,7 @@ fn setup_error(scene: &Scene, config: &Configuration, units: &Units, e: SetupErr
     SceneError::invalid(key, problem).into()
 }
 
-fn write_observables(
+pub(crate) fn write_observables(
     dir: &Path,
     obs: &mut Observers,
     plots: bool,
