@@ -102,6 +102,8 @@ impl Reporter for Quiet {}
 /// production.
 #[derive(Clone, Debug, Serialize)]
 pub struct Summary {
+    /// `dmd` (the standard-MD engine writes `smd`, issue 8).
+    pub engine: String,
     /// Events of production (pair events, cell crossings, thermostat collisions).
     pub events: u64,
     /// Production events by kind, plus bookkeeping counts (`samples`, `rebases`).
@@ -738,6 +740,7 @@ impl Context<'_> {
         .collect();
         let qs = sim.schedule_stats();
         let mut summary = Summary {
+            engine: "dmd".to_owned(),
             events: counters.events,
             events_by_kind: by_kind,
             equilibration_events: run.record.equilibration_events,

@@ -228,7 +228,7 @@ pub fn check(scene: &Scene) -> Result<(), SceneError> {
     if r_l >= r_u {
         return Err(SceneError::invalid(
             "smd.smoothing.r_l",
-            format!("{r_l} must be less than r_u = {r_u}"),
+            format!("r_l = {r_l} must be less than r_u = {r_u}"),
         ));
     }
     Ok(())
