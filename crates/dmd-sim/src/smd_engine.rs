@@ -158,6 +158,15 @@ pub fn check(scene: &Scene) -> Result<(), SceneError> {
             positive("smd.smoothing.r_u", w.r_u)?;
         }
     }
+    if let Some(sw) = &scene.sweep
+        && sw.key == "engine"
+    {
+        return Err(SceneError::invalid(
+            "sweep.key",
+            "`engine` cannot be swept (sweeps run event-driven); run the scene once per engine \
+             with --engine",
+        ));
+    }
     if scene.engine != Engine::Smd {
         return Ok(());
     }
