@@ -38,12 +38,12 @@ use crate::init::{Configuration, lattice, maxwell_boltzmann, read_orientations, 
 use crate::observable::{Correlations, Observers, Rdf, Series};
 use crate::output::{OutputError, Trajectory, write_atomically};
 use crate::rods::{equipartitioned_omegas, random_axes};
-use crate::run::{RunError, thread_cpu_seconds};
+use crate::run::{Quiet, Reporter, RunError, thread_cpu_seconds};
 use crate::scene::{
     Orientations, Positions, PotentialSpec, QueueKind, Scene, SceneError, ThermostatKind,
     ThermostatPhase, UnitSystem,
 };
-use crate::simulation::{Sampler, View};
+use crate::simulation::{Progress, Sampler, Stop, View};
 use crate::units::Units;
 
 /// Which engine runs a scene.
@@ -379,6 +379,20 @@ fn smd_error(e: SmdError) -> RunError {
 /// [`RunError::Scene`] for a scene this engine cannot run (naming the key), [`RunError::Smd`]
 /// if the integration fails, [`RunError::Output`] if a file cannot be written.
 pub fn run(scene: &Scene, base: &Path, out: Option<&Path>) -> Result<SmdSummary, RunError> {
+    run_with(scene, base, out, &mut Quiet)
+}
+
+/// [`run`] reporting the phases and their progress to `reporter` (the `dmd` command's
+/// progress bar), in simulated time.
+///
+/// # Errors
+/// As [`run`].
+pub fn run_with(
+    scene: &Scene,
+    base: &Path,
+    out: Option<&Path>,
+    reporter: &mut dyn Reporter,
+) -> Result<SmdSummary, RunError> {
     let units = Units::of(scene.units);
     let ignored = ignored_keys(scene);
     let scene = &scene.internal();
@@ -529,6 +543,7 @@ pub fn run(scene: &Scene, base: &Path, out: Option<&Path>) -> Result<SmdSummary,
         frame_every,
         ignored,
         notes,
+        reporter,
     };
     let pot_err = |e: potential::PotentialError| -> RunError {
         SceneError::invalid("pair[0].potential", e.to_string()).into()
@@ -576,7 +591,11 @@ struct Job<'a> {
     frame_every: u64,
     ignored: Vec<String>,
     notes: Vec<String>,
+    reporter: &'a mut dyn Reporter,
 }
+
+/// Progress reports per phase (and equilibration chunks).
+const REPORTS: u64 = 200;
 
 impl Job<'_> {
     fn go(self, system: System, pot: Smooth) -> Result<SmdSummary, RunError> {
@@ -627,20 +646,40 @@ impl Job<'_> {
         // Equilibration: velocity rescaling in place of the Andersen thermostat, else NVE.
         let t = &scene.thermostat;
         let mut rescale_every = 0;
+        let dt = self.settings.dt;
         if self.eq_steps > 0 {
-            if t.kind == ThermostatKind::Andersen {
+            let bath = (t.kind == ThermostatKind::Andersen).then(|| {
                 let rate = t.rate.expect("checked: andersen has a rate");
-                let bath = t.temperature.unwrap_or(scene.init.temperature);
-                rescale_every = ((1.0 / (rate * self.settings.dt)).round() as u64).max(1);
-                md.equilibrate(self.eq_steps, rescale_every, bath)
-                    .map_err(smd_error)?;
+                rescale_every = ((1.0 / (rate * dt)).round() as u64).max(1);
+                t.temperature.unwrap_or(scene.init.temperature)
+            });
+            // In chunks for the progress report; a chunk is a whole number of rescaling
+            // intervals, so the rescalings fall where one call would put them (the extra one
+            // at a chunk's start repeats the previous chunk's last: a factor 1 up to round-off).
+            let unit = rescale_every.max(1);
+            let chunk = (self.eq_steps / REPORTS).div_ceil(unit).max(1) * unit;
+            self.reporter
+                .phase("equilibration", Stop::Time(self.eq_steps as f64 * dt));
+            let mut done = 0;
+            while done < self.eq_steps {
+                let k = chunk.min(self.eq_steps - done);
+                match bath {
+                    Some(kt) => md.equilibrate(k, rescale_every, kt),
+                    None => md.run(k, k, &mut ()),
+                }
+                .map_err(smd_error)?;
+                done += k;
+                self.reporter.progress(Progress {
+                    events: done,
+                    elapsed: done as f64 * dt,
+                });
+            }
+            self.reporter.done();
+            if bath.is_some() {
                 self.notes.push(format!(
                     "equilibration: velocity rescaling every {rescale_every} steps (1/rate) in \
                      place of the Andersen thermostat"
                 ));
-            } else {
-                md.run(self.eq_steps, self.eq_steps, &mut ())
-                    .map_err(smd_error)?;
             }
         }
 
@@ -700,7 +739,13 @@ impl Job<'_> {
             rows: Vec::new(),
             bodies: Vec::new(),
             images: Vec::new(),
+            reporter: &mut *self.reporter,
+            report_every: (self.production_steps / REPORTS).max(1),
+            dt,
         };
+        bridge
+            .reporter
+            .phase("production", Stop::Time(self.production_steps as f64 * dt));
         let e0 = md.energy();
         let wall = std::time::Instant::now();
         let cpu0 = thread_cpu_seconds();
@@ -709,6 +754,7 @@ impl Job<'_> {
         let stats = md
             .run(self.production_steps, 1, &mut bridge)
             .map_err(smd_error)?;
+        bridge.reporter.done();
         let wall_seconds = wall.elapsed().as_secs_f64();
         let cpu_seconds = match (cpu0, thread_cpu_seconds()) {
             (Some(a), Some(b)) => b - a,
@@ -803,7 +849,7 @@ impl Job<'_> {
 /// Feeds the event-driven engine's observers from the integrator: a [`View`] of the state at
 /// every sample, with the virial and kinetic energy integrated over time as the event-driven
 /// engine accumulates them.
-struct Bridge {
+struct Bridge<'r> {
     observers: Observers,
     sample_every: u64,
     frame_every: u64,
@@ -818,9 +864,12 @@ struct Bridge {
     rows: Vec<smd::observe::SeriesRow>,
     bodies: Vec<Body>,
     images: Vec<[i32; 3]>,
+    reporter: &'r mut dyn Reporter,
+    report_every: u64,
+    dt: f64,
 }
 
-impl Bridge {
+impl Bridge<'_> {
     fn view<'a>(&'a mut self, s: &Snapshot<'_>) -> View<'a> {
         let sys = s.system;
         let elapsed = s.time - self.t0;
@@ -860,7 +909,7 @@ impl Bridge {
     }
 }
 
-impl Observer for Bridge {
+impl Observer for Bridge<'_> {
     fn sample(&mut self, s: &Snapshot<'_>) {
         // Trapezoids of ∫W dt and ∫K dt: the event-driven engine's Σ r·Δp is ∫W dt.
         let (w, k) = (s.energy.virial, s.energy.kinetic());
@@ -872,6 +921,12 @@ impl Observer for Bridge {
         self.last = Some((s.time, w, k));
         let step = self.steps;
         self.steps += 1;
+        if step > 0 && step.is_multiple_of(self.report_every) {
+            self.reporter.progress(Progress {
+                events: step,
+                elapsed: step as f64 * self.dt,
+            });
+        }
         if step.is_multiple_of(self.stride) {
             self.rows.push(smd::observe::SeriesRow::of(s));
         }

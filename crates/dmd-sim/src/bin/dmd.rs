@@ -343,7 +343,16 @@ fn run_smd(
         );
         return ExitCode::from(2);
     }
-    match smd_engine::run(s, base, Some(out)) {
+    let mut bar = Bar {
+        bar: None,
+        length: None,
+    };
+    let result = if quiet {
+        smd_engine::run_with(s, base, Some(out), &mut dmd_sim::run::Quiet)
+    } else {
+        smd_engine::run_with(s, base, Some(out), &mut bar)
+    };
+    match result {
         Ok(summary) => {
             if !quiet {
                 print_smd_summary(&summary, out);
