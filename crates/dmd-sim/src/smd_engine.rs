@@ -240,6 +240,15 @@ pub fn check(scene: &Scene) -> Result<(), SceneError> {
             format!("r_l = {r_l} must be less than r_u = {r_u}"),
         ));
     }
+    // The box, when the scene fixes it (else its file does, checked at the run).
+    if let Some(lengths) = crate::init::box_lengths(scene) {
+        list_skin(
+            &pot,
+            (r_l, r_u),
+            scene.smd.as_ref().and_then(|s| s.skin),
+            lengths,
+        )?;
+    }
     Ok(())
 }
 
@@ -252,6 +261,43 @@ fn window(scene: &Scene, pot: &PotentialSpec) -> (f64, f64) {
         .and_then(|s| s.smoothing)
         .unwrap_or_default();
     (w.r_l.unwrap_or(dl), w.r_u.unwrap_or(du))
+}
+
+/// The Verlet-list skin in a box of edges `lengths`: `skin` if given, else 0.6σ (the measured
+/// optimum is flat about it) or what fits a small box.
+///
+/// # Errors
+/// [`SceneError::Invalid`] naming `smd.smoothing.r_u` or `smd.skin` if the list radius
+/// `r_u + skin` reaches half the shortest box side (minimum image).
+fn list_skin(
+    pot: &PotentialSpec,
+    (_, r_u): (f64, f64),
+    skin: Option<f64>,
+    lengths: DVec3,
+) -> Result<f64, SceneError> {
+    let half = 0.5 * lengths.min_element();
+    if r_u >= half {
+        return Err(SceneError::invalid(
+            "smd.smoothing.r_u",
+            format!(
+                "the cut-off {r_u} reaches half the shortest box side {half}: a body would \
+                 interact with two images of another; use more bodies, a lower density or a \
+                 smaller r_u"
+            ),
+        ));
+    }
+    match skin {
+        Some(d) if r_u + d >= half => Err(SceneError::invalid(
+            "smd.skin",
+            format!(
+                "{d} is too large: the list radius r_u + skin must stay below half the \
+                 shortest box side {half}, so the skin must be below {}",
+                half - r_u
+            ),
+        )),
+        Some(d) => Ok(d),
+        None => Ok((0.6 * lengths_of(pot).0).min(0.9 * (half - r_u))),
+    }
 }
 
 /// The keys of a scene that the standard-MD engine does not use.
@@ -414,35 +460,7 @@ pub fn run_with(
     let n = config.positions.len();
     let spec = scene.smd.clone().unwrap_or_default();
     let (r_l, r_u) = window(scene, &pot);
-    let (sigma, _) = lengths_of(&pot);
-    let half = 0.5 * config.lengths.min_element();
-    if r_u >= half {
-        return Err(SceneError::invalid(
-            "smd.smoothing.r_u",
-            format!(
-                "the cut-off {r_u} reaches half the shortest box side {half}: a body would \
-                 interact with two images of another; use more bodies, a lower density or a \
-                 smaller r_u"
-            ),
-        )
-        .into());
-    }
-    let skin = match spec.skin {
-        Some(d) if r_u + d >= half => {
-            return Err(SceneError::invalid(
-                "smd.skin",
-                format!(
-                    "{d} is too large: the list radius r_u + skin must stay below half the \
-                     shortest box side {half}, so the skin must be below {}",
-                    half - r_u
-                ),
-            )
-            .into());
-        }
-        Some(d) => d,
-        // The measured optimum is flat about 0.6σ; a small box gets what fits.
-        None => (0.6 * sigma).min(0.9 * (half - r_u)),
-    };
+    let skin = list_skin(&pot, (r_l, r_u), spec.skin, config.lengths)?;
     let dt = spec
         .dt
         .unwrap_or_else(|| default_dt(&pot, species.mass, species.inertia, kt));

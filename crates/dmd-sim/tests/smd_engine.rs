@@ -256,6 +256,14 @@ fn a_lennard_jones_scene_runs_and_the_event_driven_runner_refuses_it() {
         s.potential_energy_per_body
     );
     assert_eq!(s.rotational_temperature, None);
+    // A cut-off beyond half the box (L = 8 here) is refused when the scene is read, so
+    // `dmd check` catches it too.
+    let e = Scene::from_str_with(LJ, &["smd.smoothing.r_u=4.0".to_owned()]).unwrap_err();
+    assert!(
+        e.to_string()
+            .starts_with("scene key `smd.smoothing.r_u`: the cut-off 4 reaches half"),
+        "{e}"
+    );
     // The event-driven runner never runs an smd scene silently.
     let scene = Scene::from_str_with(LJ, &[]).unwrap();
     let e = run_scene(&scene, Path::new("."), None, &mut Quiet).unwrap_err();

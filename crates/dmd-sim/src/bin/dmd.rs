@@ -231,9 +231,14 @@ fn main() -> ExitCode {
         }) {
             Ok((s, _)) => {
                 println!(
-                    "{}: a valid scene of {} bodies",
+                    "{}: a valid scene of {} bodies{}",
                     scene.display(),
-                    s.n_bodies()
+                    s.n_bodies(),
+                    if s.engine == Engine::Smd {
+                        " for the smd engine"
+                    } else {
+                        ""
+                    }
                 );
                 ExitCode::SUCCESS
             }
