@@ -963,3 +963,29 @@ impl Observer for Bridge<'_> {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_for_the_papers_rods_and_lennard_jones() {
+        // Internal units (Å, g/mol, ps, 10 J/mol): ε = 300, kT = 1.4 ε = 420.
+        let rods = PotentialSpec::Rods {
+            epsilon: 300.0,
+            sigma: 3.035,
+            zeta: 1.0,
+        };
+        let dt = default_dt(&rods, 18.0, Some(1.154), 420.0);
+        assert!((dt - 0.00175).abs() < 0.00002, "dt = {dt} ps");
+        assert_eq!(default_window(&rods), (2.5 * 3.035, 3.0 * 3.035));
+        let lj = PotentialSpec::LennardJones {
+            epsilon: 1.0,
+            sigma: 1.0,
+        };
+        // At T* = 1 the energy scale is ε; at T* = 4 it is kT.
+        assert_eq!(default_dt(&lj, 1.0, None, 1.0), 0.0028);
+        assert_eq!(default_dt(&lj, 1.0, None, 4.0), 0.0014);
+        assert_eq!(default_window(&lj), (2.5, 3.0));
+    }
+}
