@@ -327,3 +327,51 @@ time = 0.2
     );
     assert!(s.rotational_temperature.is_some());
 }
+
+#[test]
+fn a_trajectory_frame_starts_a_run_from_a_file_with_its_orientations() {
+    // The first frame of an smd trajectory (positions, and the rods' orientation column) is a
+    // valid `init.file` for the next run: the mapping reads files as the event-driven engine.
+    let dir = tmp("file");
+    run(
+        RODS,
+        &[
+            "run.equilibration_time=0.018",
+            "run.time=0.018",
+            "output.trajectory.interval=0.009",
+        ],
+        Some(&dir),
+    );
+    let xyz = std::fs::read_to_string(dir.join("trajectory.xyz")).unwrap();
+    let first: Vec<&str> = xyz.lines().take(2 + 216).collect();
+    let file = dir.join("start.xyz");
+    std::fs::write(&file, first.join("\n") + "\n").unwrap();
+    let o = [
+        "init.positions=file".to_owned(),
+        "init.orientations=file".to_owned(),
+        format!("init.file=\"{}\"", file.display()),
+        "box.density=".to_owned(),
+        "run.equilibration_time=0".to_owned(),
+        "run.time=0.018".to_owned(),
+        "output=".to_owned(),
+    ];
+    let scene = Scene::from_str_with(RODS, &o).unwrap_or_else(|e| panic!("{e}"));
+    let s = smd_engine::run(&scene, Path::new("."), None).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!((s.n_bodies, s.steps, s.equilibration_steps), (216, 10, 0));
+    assert!(s.rotational_temperature.is_some_and(|t| t > 0.0));
+    // A missing file is an error naming the key, not a panic.
+    let o2: Vec<String> = o
+        .iter()
+        .map(|x| {
+            if x.starts_with("init.file") {
+                format!("init.file=\"{}\"", dir.join("none.xyz").display())
+            } else {
+                x.clone()
+            }
+        })
+        .collect();
+    let scene = Scene::from_str_with(RODS, &o2).unwrap();
+    let e = smd_engine::run(&scene, Path::new("."), None).unwrap_err();
+    assert!(e.to_string().starts_with("scene key `init.file`"), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
