@@ -234,6 +234,27 @@ fn the_engine_flag_runs_the_shipped_paper_scene() {
         err.contains("scene key `run.events`: not available with engine = \"smd\""),
         "{err}"
     );
+    // Checkpoints are the event-driven engine's: refused, exit status 2.
+    let ck = Command::new(env!("CARGO_BIN_EXE_dmd"))
+        .current_dir(&root)
+        .args([
+            "run",
+            "scenes/rods-paper.toml",
+            "--engine",
+            "smd",
+            "--checkpoint-every",
+            "1m",
+            "--out",
+        ])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&ck.stderr);
+    assert_eq!(ck.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("--checkpoint-every is not available with engine = \"smd\""),
+        "{err}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 
