@@ -69,6 +69,8 @@ pub mod scene;
 pub mod schedule;
 pub mod simulation;
 pub mod sites;
+// Issue 8: the standard-MD engine on the same scenes.
+pub mod smd_engine;
 pub mod sum;
 pub mod terraced;
 pub mod units;

@@ -52,6 +52,9 @@ pub enum RunError {
     /// A checkpoint cannot be resumed (issue 9).
     #[error(transparent)]
     Checkpoint(#[from] CheckpointError),
+    /// The standard-MD engine could not go on (issue 8).
+    #[error("smd: {0}")]
+    Smd(#[from] smd::SmdError),
     /// Stopped after a checkpoint, as [`RunOptions::halt_after_checkpoint`] asked.
     #[error("halted after writing a checkpoint, as asked")]
     Halted,
@@ -99,6 +102,8 @@ impl Reporter for Quiet {}
 /// production.
 #[derive(Clone, Debug, Serialize)]
 pub struct Summary {
+    /// `dmd` (the standard-MD engine writes `smd`, issue 8).
+    pub engine: String,
     /// Events of production (pair events, cell crossings, thermostat collisions).
     pub events: u64,
     /// Production events by kind, plus bookkeeping counts (`samples`, `rebases`).
@@ -237,6 +242,14 @@ pub fn run_scene_with(
     reporter: &mut dyn Reporter,
     options: &RunOptions,
 ) -> Result<Summary, RunError> {
+    if scene.engine == crate::smd_engine::Engine::Smd {
+        // Issue 8: never run an smd scene event-driven behind the caller's back.
+        return Err(SceneError::invalid(
+            "engine",
+            "this scene asks for the smd engine: run it with smd_engine::run (as `dmd run` does)",
+        )
+        .into());
+    }
     let units = Units::of(scene.units);
     let scene = &scene.internal();
     let plan = Plan::of(scene)?;
@@ -727,6 +740,7 @@ impl Context<'_> {
         .collect();
         let qs = sim.schedule_stats();
         let mut summary = Summary {
+            engine: "dmd".to_owned(),
             events: counters.events,
             events_by_kind: by_kind,
             equilibration_events: run.record.equilibration_events,
@@ -1214,7 +1228,7 @@ fn setup_error(scene: &Scene, config: &Configuration, units: &Units, e: SetupErr
     SceneError::invalid(key, problem).into()
 }
 
-fn write_observables(
+pub(crate) fn write_observables(
     dir: &Path,
     obs: &mut Observers,
     plots: bool,

@@ -110,6 +110,12 @@ pub struct Scene {
     /// A parameter sweep: the scene run once per value of a key (issue 9).
     #[serde(default)]
     pub sweep: Option<SweepSpec>,
+    /// The engine: `dmd` (event-driven, default) or `smd` (standard MD, issue 8).
+    #[serde(default)]
+    pub engine: crate::smd_engine::Engine,
+    /// Settings of the standard-MD engine (issue 8; ignored by the event-driven one).
+    #[serde(default)]
+    pub smd: Option<crate::smd_engine::SmdSpec>,
 }
 
 /// The unit system of a scene's numbers.
@@ -967,6 +973,12 @@ impl Scene {
                     }
                     check_steps(k, &p.steps)?;
                 }
+                // Standard MD integrates the smooth potential itself (issue 8).
+                (Some(pot), true)
+                    if p.terraces.is_none() && self.engine == crate::smd_engine::Engine::Smd =>
+                {
+                    check_potential(k, pot)?;
+                }
                 (Some(pot), true) => {
                     check_potential(k, pot)?;
                     let t = p.terraces.as_ref().ok_or_else(|| {
@@ -1139,6 +1151,7 @@ impl Scene {
         if let Some(tr) = &o.trajectory {
             positive("output.trajectory.interval", tr.interval)?;
         }
+        crate::smd_engine::check(self)?;
         self.check_issue_9()
     }
 

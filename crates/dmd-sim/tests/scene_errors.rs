@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 
 use dmd_sim::run::{Quiet, run_scene};
 use dmd_sim::scene::Scene;
+use dmd_sim::smd_engine::{self, Engine};
 
 fn corpus() -> Vec<PathBuf> {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/bad-scenes");
@@ -23,6 +24,13 @@ fn corpus() -> Vec<PathBuf> {
 fn first_error_line(path: &Path, overrides: &[String]) -> Option<String> {
     let message = match Scene::load(path, overrides) {
         Err(e) => e.to_string(),
+        // Issue 8: a scene for the standard-MD engine goes where `dmd run` sends it.
+        Ok((scene, base)) if scene.engine == Engine::Smd => {
+            match smd_engine::run(&scene, &base, None) {
+                Err(e) => e.to_string(),
+                Ok(_) => return None,
+            }
+        }
         Ok((scene, base)) => match run_scene(&scene, &base, None, &mut Quiet) {
             Err(e) => e.to_string(),
             Ok(_) => return None,

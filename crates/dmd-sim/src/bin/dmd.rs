@@ -15,6 +15,7 @@ use dmd_sim::checkpoint::{self, Every, SceneSource};
 use dmd_sim::run::{Reporter, RunOptions, Summary, run_scene_with};
 use dmd_sim::scene::Scene;
 use dmd_sim::simulation::{Progress, Stop};
+use dmd_sim::smd_engine::{self, Engine, SmdSummary};
 use indicatif::{ProgressBar, ProgressStyle};
 
 /// Event-driven molecular dynamics of spheres with hard cores, square wells and stepped
@@ -39,6 +40,10 @@ enum Command {
         /// `--set run.events=1e6 --set box.density=0.8 --set species.0.count=4000`.
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
+        /// The engine, overriding the scene's `engine` key: `dmd` (event-driven) or `smd`
+        /// (standard MD on the smoothed potential, issue 8).
+        #[arg(long, value_parser = ["dmd", "smd"])]
+        engine: Option<String>,
         /// No progress bar and no summary on the terminal.
         #[arg(long, short)]
         quiet: bool,
@@ -80,6 +85,9 @@ enum Command {
         /// Override a scene key (as for `run`).
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
+        /// Check for this engine (as for `run`).
+        #[arg(long, value_parser = ["dmd", "smd"])]
+        engine: Option<String>,
     },
 }
 
@@ -213,12 +221,24 @@ fn print_summary(s: &Summary, out: &std::path::Path) {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
-        Command::Check { scene, set } => match Scene::load(&scene, &set) {
+        Command::Check {
+            scene,
+            mut set,
+            engine,
+        } => match Scene::load(&scene, {
+            set.extend(engine.map(|e| format!("engine={e}")));
+            &set
+        }) {
             Ok((s, _)) => {
                 println!(
-                    "{}: a valid scene of {} bodies",
+                    "{}: a valid scene of {} bodies{}",
                     scene.display(),
-                    s.n_bodies()
+                    s.n_bodies(),
+                    if s.engine == Engine::Smd {
+                        " for the smd engine"
+                    } else {
+                        ""
+                    }
                 );
                 ExitCode::SUCCESS
             }
@@ -230,12 +250,15 @@ fn main() -> ExitCode {
         Command::Run {
             scene,
             out,
-            set,
+            mut set,
+            engine,
             quiet,
             checkpoint_every,
             threads,
             halt_after_checkpoint,
         } => {
+            // The flag is the last override, so it wins over the scene's key.
+            set.extend(engine.map(|e| format!("engine={e}")));
             let (s, base) = match Scene::load(&scene, &set) {
                 Ok(x) => x,
                 Err(e) => {
@@ -243,6 +266,12 @@ fn main() -> ExitCode {
                     return ExitCode::from(2);
                 }
             };
+            if s.engine == Engine::Smd {
+                return run_smd(&scene, &s, &base, &out, checkpoint_every.is_some(), quiet);
+            }
+            if s.smd.is_some() && !quiet {
+                println!("dmd: note: [smd] is ignored by the event-driven engine");
+            }
             let every = match checkpoint_every.as_deref().map(Every::parse).transpose() {
                 Ok(e) => e,
                 Err(e) => {
@@ -301,6 +330,103 @@ fn main() -> ExitCode {
             }
         }
     }
+}
+
+/// `dmd run` of a scene with `engine = "smd"` (issue 8).
+fn run_smd(
+    scene: &std::path::Path,
+    s: &Scene,
+    base: &std::path::Path,
+    out: &std::path::Path,
+    checkpoints: bool,
+    quiet: bool,
+) -> ExitCode {
+    if checkpoints {
+        eprintln!(
+            "dmd: {}: --checkpoint-every is not available with engine = \"smd\"",
+            scene.display()
+        );
+        return ExitCode::from(2);
+    }
+    let mut bar = Bar {
+        bar: None,
+        length: None,
+    };
+    let result = if quiet {
+        smd_engine::run_with(s, base, Some(out), &mut dmd_sim::run::Quiet)
+    } else {
+        smd_engine::run_with(s, base, Some(out), &mut bar)
+    };
+    match result {
+        Ok(summary) => {
+            if !quiet {
+                print_smd_summary(&summary, out);
+            }
+            ExitCode::SUCCESS
+        }
+        Err(e @ dmd_sim::run::RunError::Scene(_)) => {
+            eprintln!("dmd: {}: {e}", scene.display());
+            ExitCode::from(2)
+        }
+        Err(e) => {
+            eprintln!("dmd: {}: {e}", scene.display());
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn print_smd_summary(s: &SmdSummary, out: &std::path::Path) {
+    println!(
+        "dmd (engine smd): {} bodies ({}), density {:.6}",
+        s.n_bodies, s.model, s.density
+    );
+    println!(
+        "  steps         {} of dt = {:.6e} ({} equilibration) in {:.3} s: {:.1} ns per particle-step",
+        s.steps, s.dt, s.equilibration_steps, s.cpu_seconds, s.ns_per_particle_step
+    );
+    println!(
+        "  sim time      {:.6}   neighbour lists {} ({:.1} steps each, skin {:.4}), smoothing {:?}",
+        s.sim_time, s.neighbour_list_builds, s.steps_per_build, s.skin, s.smoothing
+    );
+    println!(
+        "  temperature   {:.6} ± {:.6}   pressure {:.6} ± {:.6} (Z = {:.6})",
+        s.temperature, s.temperature_error, s.pressure, s.pressure_error, s.compressibility
+    );
+    println!(
+        "  energy        {:.12e} -> {:.12e} (relative drift {:.2e}), U/N {:.6}",
+        s.energy_total_start,
+        s.energy_total_end,
+        s.relative_energy_drift,
+        s.potential_energy_per_body
+    );
+    println!(
+        "  energy drift  {:.3e} per body per unit time, std {:.3e} ({:.3} of std U)",
+        s.energy_drift_per_body, s.energy_total_std, s.energy_fluctuation_over_potential_std
+    );
+    if let Some(d) = s.diffusion_msd {
+        println!("  diffusion (MSD) {d:.6}");
+    }
+    if let Some(d) = s.diffusion_vacf {
+        println!("  diffusion (VACF) {d:.6}");
+    }
+    if !s.ignored_keys.is_empty() {
+        println!(
+            "  ignored (event-driven only): {}",
+            s.ignored_keys.join(", ")
+        );
+    }
+    for n in &s.notes {
+        println!("  note: {n}");
+    }
+    println!(
+        "  wrote {}/summary.json{}",
+        out.display(),
+        if s.files.is_empty() {
+            String::new()
+        } else {
+            format!(" and {}", s.files.join(", "))
+        }
+    );
 }
 
 /// `dmd resume`: every check of the checkpoint passes before anything is written.
