@@ -68,6 +68,7 @@ pub mod scene;
 // Issue 10: rigid site-based molecules (seed 000).
 pub mod schedule;
 pub mod simulation;
+pub mod site_scene;
 pub mod sites;
 pub mod sum;
 pub mod terraced;

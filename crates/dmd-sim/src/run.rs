@@ -375,6 +375,19 @@ pub fn run_scene_with(
             let model = terraced_model(scene, base, &config, tables)?;
             ctx.go_any_queue(model, reporter)
         }
+        Plan::Sites(plan) => {
+            // Issue 10: their state cannot be restored from a checkpoint yet.
+            if options.checkpoint_every.is_some() {
+                return Err(SceneError::invalid(
+                    "checkpoint",
+                    "checkpoints are not available for rigid site molecules (their attitudes \
+                     and site-pair levels are not saved yet): run without --checkpoint-every",
+                )
+                .into());
+            }
+            let model = crate::site_scene::model(scene, &config, plan)?;
+            ctx.go_any_queue(model, reporter)
+        }
     }
 }
 
