@@ -71,7 +71,10 @@ pub fn check_document(doc: &toml::Table) -> Result<(), SceneError> {
 pub fn fill_masses(scene: &mut Scene) {
     for s in &mut scene.species {
         if let Some(sites) = &s.sites {
-            s.mass = sites.iter().map(|a| a.mass).sum();
+            // A bad site mass is reported at the site by the checks.
+            if sites.iter().all(|a| a.mass.is_finite() && a.mass > 0.0) {
+                s.mass = sites.iter().map(|a| a.mass).sum();
+            }
         } else if let Some(m) = s.molecule {
             s.mass = match m {
                 MoleculeSpec::Dumbbell { .. } => 2.0,
@@ -317,8 +320,7 @@ pub(crate) fn check(scene: &Scene) -> Result<(), SceneError> {
                 return Err(SceneError::invalid(
                     "impulse.rule",
                     format!(
-                        "`constrained` cannot hold species `{}` rigid: {why}; use \
-                         `contact-point` (the same physics)",
+                        "species `{}`: {why}; use `contact-point` (the same physics)",
                         scene.species[k].name
                     ),
                 ));
