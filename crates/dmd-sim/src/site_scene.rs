@@ -106,8 +106,11 @@ pub(crate) fn refuse_site_keys(scene: &Scene) -> Result<(), SceneError> {
 }
 
 /// The site kinds of the scene in order of first appearance, and per species its atoms with
-/// their kinds as indices into that list (checked values only).
-fn atoms_of(scene: &Scene) -> (Vec<String>, Vec<Vec<SiteAtom>>) {
+/// their kinds as indices into that list.
+///
+/// # Errors
+/// A species that is not a molecule, or a shipped molecule that refuses its parameters.
+fn atoms_of(scene: &Scene) -> Result<(Vec<String>, Vec<Vec<SiteAtom>>), SceneError> {
     let mut kinds: Vec<String> = Vec::new();
     let mut index = |name: &str| -> u32 {
         if let Some(k) = kinds.iter().position(|m| m == name) {
@@ -118,7 +121,7 @@ fn atoms_of(scene: &Scene) -> (Vec<String>, Vec<Vec<SiteAtom>>) {
         }
     };
     let mut all = Vec::new();
-    for s in &scene.species {
+    for (k, s) in scene.species.iter().enumerate() {
         let atoms: Vec<SiteAtom> = if let Some(sites) = &s.sites {
             sites
                 .iter()
@@ -131,15 +134,21 @@ fn atoms_of(scene: &Scene) -> (Vec<String>, Vec<Vec<SiteAtom>>) {
         } else {
             let (t, names): (MoleculeType, &[&str]) = match s.molecule {
                 Some(MoleculeSpec::Dumbbell { elongation }) => (
-                    molecules::dumbbell(elongation)
-                        .map(|p| p.0)
-                        // Checked before: an unusable elongation never gets here.
-                        .unwrap_or_else(|_| molecules::methane_like().0),
+                    molecules::dumbbell(elongation).map(|p| p.0).map_err(|e| {
+                        SceneError::invalid(
+                            format!("species[{k}].molecule.elongation"),
+                            e.to_string(),
+                        )
+                    })?,
                     &["A"],
                 ),
                 Some(MoleculeSpec::MethaneLike) => (molecules::methane_like().0, &["C", "H"]),
-                Some(MoleculeSpec::BenzeneLike) | None => {
-                    (molecules::benzene_like().0, &["C", "H"])
+                Some(MoleculeSpec::BenzeneLike) => (molecules::benzene_like().0, &["C", "H"]),
+                None => {
+                    return Err(SceneError::invalid(
+                        format!("species[{k}].sites"),
+                        "not a molecule: give `sites` or `molecule`",
+                    ));
                 }
             };
             t.sites()
@@ -155,7 +164,7 @@ fn atoms_of(scene: &Scene) -> (Vec<String>, Vec<Vec<SiteAtom>>) {
         };
         all.push(atoms);
     }
-    (kinds, all)
+    Ok((kinds, all))
 }
 
 /// The checks of a scene of site molecules (called from `Scene::check` instead of the pair
@@ -247,7 +256,7 @@ pub(crate) fn check(scene: &Scene) -> Result<(), SceneError> {
             }
         }
     }
-    let (kinds, atoms) = atoms_of(scene);
+    let (kinds, atoms) = atoms_of(scene)?;
     let mut types = Vec::new();
     for (k, a) in atoms.iter().enumerate() {
         let t = MoleculeType::new(a).map_err(|e| {
@@ -486,7 +495,7 @@ impl SitesPlan {
     /// # Errors
     /// [`SceneError::Invalid`] if the model refuses them (never for a checked scene).
     pub fn of(scene: &Scene) -> Result<Self, SceneError> {
-        let (kinds, atoms) = atoms_of(scene);
+        let (kinds, atoms) = atoms_of(scene)?;
         let types = atoms
             .iter()
             .enumerate()
