@@ -159,7 +159,7 @@ pub struct Summary {
     /// Anomalies by kind.
     pub anomalies_by_kind: BTreeMap<String, u64>,
     /// Interaction model used (`hard-spheres`, `stepped`, `terraced-rods`,
-    /// `terraced-gay-berne`).
+    /// `terraced-gay-berne`, `rigid-sites`).
     pub model: String,
     /// The unit system of the numbers (`reduced` or `molecular`).
     pub units: String,
