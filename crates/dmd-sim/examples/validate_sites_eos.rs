@@ -41,7 +41,8 @@ fn dumbbell_volume(l: f64) -> f64 {
 /// `Z = (1 + f₁η + f₂η² − f₃η³)/(1 − η)³`, `f₁ = 1 + 0.37836 L* + 1.07860 L*³`,
 /// `f₂ = 1 + 1.30376 L* + 1.80010 L*³`, `f₃ = 1 + 2.39803 L* + 0.35700 L*³`. (Coefficients as
 /// reproduced in Curro et al., J. Chem. Phys. 153, 244903 (2020), Eq. B6, whose denominator
-/// `(1 − η)²` is a misprint: at L* = 0 the fit must be Carnahan–Starling.)
+/// `(1 − η)²` is a misprint: at L* = 0 the fit must be Carnahan–Starling; that paper cites the
+/// page as 341, the issue and our records as 85 — not checked against the original.)
 fn tildesley_streett(l: f64, eta: f64) -> f64 {
     let f1 = 1.0 + 0.37836 * l + 1.07860 * l.powi(3);
     let f2 = 1.0 + 1.30376 * l + 1.80010 * l.powi(3);
