@@ -88,6 +88,14 @@ pub(crate) const CHECKS: &[Check] = &[
         quick: &["--quick"],
     },
     Check {
+        name: "sites-eos",
+        title: "Hard dumbbells: compressibility factor from the molecular collision virial against the Tildesley–Streett equation of state at two elongations",
+        package: "dmd-sim",
+        example: "validate_sites_eos",
+        full: &[],
+        quick: &["--quick"],
+    },
+    Check {
         name: "hmc",
         title: "Hybrid Monte Carlo: exact canonical answers with deliberate misses, acceptance against segment length, stiff systems, checkpoints, chains",
         package: "dmd-sim",

@@ -68,6 +68,7 @@ pub mod scene;
 // Issue 10: rigid site-based molecules (seed 000).
 pub mod schedule;
 pub mod simulation;
+pub mod site_scene;
 pub mod sites;
 // Issue 8: the standard-MD engine on the same scenes.
 pub mod smd_engine;

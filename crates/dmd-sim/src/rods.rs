@@ -35,6 +35,8 @@ pub enum Plan {
     Rods(Vec<PairTable<LjRod>>),
     /// Gay–Berne rods.
     GayBerne(Vec<PairTable<GayBerne>>),
+    /// Rigid site molecules with stepped site–site potentials (issue 10).
+    Sites(crate::site_scene::SitesPlan),
 }
 
 impl Plan {
@@ -48,6 +50,9 @@ impl Plan {
         let names: Vec<&str> = scene.species.iter().map(|s| s.name.as_str()).collect();
         let index = |n: &str| names.iter().position(|&m| m == n).expect("checked");
         let kt = scene.init.temperature;
+        if scene.has_sites() {
+            return Ok(Plan::Sites(crate::site_scene::SitesPlan::of(scene)?));
+        }
         let first = scene.pair.first().and_then(|p| p.potential);
         match first {
             None => Ok(Plan::Spheres(Potentials::from_scene(scene))),
@@ -130,6 +135,7 @@ impl Plan {
             Plan::Spheres(p) => p.reach(),
             Plan::Rods(t) => t.iter().map(|(_, p)| p.reach()).fold(0.0, f64::max),
             Plan::GayBerne(t) => t.iter().map(|(_, p)| p.reach()).fold(0.0, f64::max),
+            Plan::Sites(p) => p.reach(),
         }
     }
 
@@ -140,6 +146,7 @@ impl Plan {
             Plan::Spheres(_) => "stepped",
             Plan::Rods(_) => "terraced-rods",
             Plan::GayBerne(_) => "terraced-gay-berne",
+            Plan::Sites(_) => "rigid-sites",
         }
     }
 }

@@ -164,7 +164,7 @@ pub struct Summary {
     /// Anomalies by kind.
     pub anomalies_by_kind: BTreeMap<String, u64>,
     /// Interaction model used (`hard-spheres`, `stepped`, `terraced-rods`,
-    /// `terraced-gay-berne`).
+    /// `terraced-gay-berne`, `rigid-sites`).
     pub model: String,
     /// The unit system of the numbers (`reduced` or `molecular`).
     pub units: String,
@@ -386,6 +386,19 @@ pub fn run_scene_with(
         }
         Plan::GayBerne(tables) => {
             let model = terraced_model(scene, base, &config, tables)?;
+            ctx.go_any_queue(model, reporter)
+        }
+        Plan::Sites(plan) => {
+            // Issue 10: their state cannot be restored from a checkpoint yet.
+            if options.checkpoint_every.is_some() {
+                return Err(SceneError::invalid(
+                    "checkpoint",
+                    "checkpoints are not available for rigid site molecules (their attitudes \
+                     and site-pair levels are not saved yet): run without --checkpoint-every",
+                )
+                .into());
+            }
+            let model = crate::site_scene::model(scene, &config, plan)?;
             ctx.go_any_queue(model, reporter)
         }
     }

@@ -116,6 +116,12 @@ pub struct Scene {
     /// Settings of the standard-MD engine (issue 8; ignored by the event-driven one).
     #[serde(default)]
     pub smd: Option<crate::smd_engine::SmdSpec>,
+    /// Site–site potentials of rigid site molecules, one per unordered pair of site kinds
+    /// (issue 10).
+    #[serde(default)]
+    pub site_pair: Vec<SitePairSpec>,
+    /// How events of rigid site molecules are executed (issue 10).
+    pub impulse: Option<ImpulseSpec>,
 }
 
 /// The unit system of a scene's numbers.
@@ -257,6 +263,73 @@ pub struct SpeciesSpec {
     /// Moment of inertia about an axis through the centre perpendicular to the body's own:
     /// the body is a rod (a linear rotor, 003 §V). Spheres have none.
     pub inertia: Option<f64>,
+    /// The atoms of a rigid site molecule (issue 10).
+    pub sites: Option<Vec<SiteSpec>>,
+    /// Or: a shipped rigid site molecule (issue 10).
+    pub molecule: Option<MoleculeSpec>,
+}
+
+// ----- Rigid site molecules (issue 10) -----------------------------------------------------------
+
+/// One atom (site) of a rigid molecule.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SiteSpec {
+    /// Site kind: names the site–site potentials (`site_pair`).
+    pub kind: String,
+    /// Mass.
+    pub mass: f64,
+    /// Position in any frame (the centre of mass and principal axes are found).
+    pub position: [f64; 3],
+}
+
+/// A shipped rigid site molecule (`sites::molecules`).
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum MoleculeSpec {
+    /// Two sites of kind `A`, unit masses, `elongation` apart (L* = L/σ with σ the `A`–`A`
+    /// hard core).
+    Dumbbell {
+        /// Site separation.
+        elongation: f64,
+    },
+    /// A site of kind `C` (mass 12) inside a tetrahedron of four of kind `H` (mass 1) at 0.32.
+    MethaneLike,
+    /// A hexagon of six `C` (mass 12) at radius 0.41 with six `H` (mass 1) at 0.73.
+    BenzeneLike,
+}
+
+/// The stepped potential between two site kinds.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SitePairSpec {
+    /// The two site kinds (the same name twice for like pairs).
+    pub sites: [String; 2],
+    /// `[radius, energy step]` pairs, as `pair.steps`.
+    pub steps: Vec<[f64; 2]>,
+}
+
+/// Which impulse rule executes the events of site molecules.
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum ImpulseRuleSpec {
+    /// The impulse at the two sites along the line joining them (000 §IV.B).
+    #[default]
+    ContactPoint,
+    /// Impulses on the atoms plus impulsive constraint forces (000 §IV.A).
+    Constrained,
+}
+
+/// `[impulse]`: the impulse rule of site molecules.
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ImpulseSpec {
+    /// `contact-point` (default) or `constrained`.
+    #[serde(default)]
+    pub rule: ImpulseRuleSpec,
+    /// Also run the other rule at every event and report how far apart they land.
+    #[serde(default)]
+    pub cross_check: bool,
 }
 
 fn one() -> f64 {
@@ -714,7 +787,8 @@ impl Scene {
         for arg in overrides {
             Scene::apply_override(&mut doc, arg)?;
         }
-        let scene: Scene = serde_path_to_error::deserialize(toml::Value::Table(doc)).map_err(
+        crate::site_scene::check_document(&doc)?;
+        let mut scene: Scene = serde_path_to_error::deserialize(toml::Value::Table(doc)).map_err(
             |e: serde_path_to_error::Error<toml::de::Error>| {
                 let key = e.path().to_string();
                 // toml appends its own `in `key`` line; the path above is more precise.
@@ -728,6 +802,7 @@ impl Scene {
                 SceneError::Key { key, problem }
             },
         )?;
+        crate::site_scene::fill_masses(&mut scene);
         scene.check()?;
         scene.check_sweep_points(text, overrides)?;
         Ok(scene)
@@ -931,86 +1006,12 @@ impl Scene {
                 ),
             ));
         }
-        // Pair tables.
-        let names: Vec<&str> = self.species.iter().map(|s| s.name.as_str()).collect();
-        let index = |k: usize, name: &str| -> Result<usize, SceneError> {
-            names.iter().position(|&m| m == name).ok_or_else(|| {
-                SceneError::invalid(
-                    format!("pair[{k}].species"),
-                    format!(
-                        "unknown species `{name}` (the scene defines {})",
-                        names
-                            .iter()
-                            .map(|m| format!("`{m}`"))
-                            .collect::<Vec<_>>()
-                            .join(", ")
-                    ),
-                )
-            })
-        };
-        let ns = names.len();
-        let mut seen = vec![None::<usize>; ns * ns];
-        for (k, p) in self.pair.iter().enumerate() {
-            let (a, b) = (index(k, &p.species[0])?, index(k, &p.species[1])?);
-            if let Some(first) = seen[a * ns + b] {
-                return Err(SceneError::invalid(
-                    format!("pair[{k}].species"),
-                    format!(
-                        "the pair `{}`–`{}` already has a table (pair[{first}])",
-                        p.species[0], p.species[1]
-                    ),
-                ));
-            }
-            seen[a * ns + b] = Some(k);
-            seen[b * ns + a] = Some(k);
-            match (&p.potential, p.steps.is_empty()) {
-                (None, _) => {
-                    if p.terraces.is_some() {
-                        return Err(SceneError::invalid(
-                            format!("pair[{k}].terraces"),
-                            "only used with `potential` (a smooth potential on terraces)",
-                        ));
-                    }
-                    check_steps(k, &p.steps)?;
-                }
-                // Standard MD integrates the smooth potential itself (issue 8).
-                (Some(pot), true)
-                    if p.terraces.is_none() && self.engine == crate::smd_engine::Engine::Smd =>
-                {
-                    check_potential(k, pot)?;
-                }
-                (Some(pot), true) => {
-                    check_potential(k, pot)?;
-                    let t = p.terraces.as_ref().ok_or_else(|| {
-                        SceneError::invalid(
-                            format!("pair[{k}].terraces"),
-                            "a smooth potential needs its terraces (for example \
-                             `terraces = { step_kt = 0.5 }`)",
-                        )
-                    })?;
-                    check_terraces(k, pot, t)?;
-                }
-                (Some(_), false) => {
-                    return Err(SceneError::invalid(
-                        format!("pair[{k}]"),
-                        "give either `steps` or a `potential` with `terraces`, not both",
-                    ));
-                }
-            }
-        }
-        self.check_bodies()?;
-        for a in 0..ns {
-            for b in a..ns {
-                if seen[a * ns + b].is_none() {
-                    return Err(SceneError::invalid(
-                        "pair",
-                        format!(
-                            "no pair table for species `{}` and `{}`: every pair of species needs one",
-                            names[a], names[b]
-                        ),
-                    ));
-                }
-            }
+        // Pair tables (issue 10: rigid site molecules have site–site tables instead).
+        if self.has_sites() {
+            crate::site_scene::check(self)?;
+        } else {
+            crate::site_scene::refuse_site_keys(self)?;
+            self.check_pair_tables()?;
         }
         // Initial state.
         positive("init.temperature", self.init.temperature)?;
@@ -1153,6 +1154,91 @@ impl Scene {
         }
         crate::smd_engine::check(self)?;
         self.check_issue_9()
+    }
+
+    /// The pair tables of spheres and rods, and the checks of their bodies.
+    fn check_pair_tables(&self) -> Result<(), SceneError> {
+        let names: Vec<&str> = self.species.iter().map(|s| s.name.as_str()).collect();
+        let index = |k: usize, name: &str| -> Result<usize, SceneError> {
+            names.iter().position(|&m| m == name).ok_or_else(|| {
+                SceneError::invalid(
+                    format!("pair[{k}].species"),
+                    format!(
+                        "unknown species `{name}` (the scene defines {})",
+                        names
+                            .iter()
+                            .map(|m| format!("`{m}`"))
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ),
+                )
+            })
+        };
+        let ns = names.len();
+        let mut seen = vec![None::<usize>; ns * ns];
+        for (k, p) in self.pair.iter().enumerate() {
+            let (a, b) = (index(k, &p.species[0])?, index(k, &p.species[1])?);
+            if let Some(first) = seen[a * ns + b] {
+                return Err(SceneError::invalid(
+                    format!("pair[{k}].species"),
+                    format!(
+                        "the pair `{}`–`{}` already has a table (pair[{first}])",
+                        p.species[0], p.species[1]
+                    ),
+                ));
+            }
+            seen[a * ns + b] = Some(k);
+            seen[b * ns + a] = Some(k);
+            match (&p.potential, p.steps.is_empty()) {
+                (None, _) => {
+                    if p.terraces.is_some() {
+                        return Err(SceneError::invalid(
+                            format!("pair[{k}].terraces"),
+                            "only used with `potential` (a smooth potential on terraces)",
+                        ));
+                    }
+                    check_steps(k, &p.steps)?;
+                }
+                // Standard MD integrates the smooth potential itself (issue 8).
+                (Some(pot), true)
+                    if p.terraces.is_none() && self.engine == crate::smd_engine::Engine::Smd =>
+                {
+                    check_potential(k, pot)?;
+                }
+                (Some(pot), true) => {
+                    check_potential(k, pot)?;
+                    let t = p.terraces.as_ref().ok_or_else(|| {
+                        SceneError::invalid(
+                            format!("pair[{k}].terraces"),
+                            "a smooth potential needs its terraces (for example \
+                             `terraces = { step_kt = 0.5 }`)",
+                        )
+                    })?;
+                    check_terraces(k, pot, t)?;
+                }
+                (Some(_), false) => {
+                    return Err(SceneError::invalid(
+                        format!("pair[{k}]"),
+                        "give either `steps` or a `potential` with `terraces`, not both",
+                    ));
+                }
+            }
+        }
+        self.check_bodies()?;
+        for a in 0..ns {
+            for b in a..ns {
+                if seen[a * ns + b].is_none() {
+                    return Err(SceneError::invalid(
+                        "pair",
+                        format!(
+                            "no pair table for species `{}` and `{}`: every pair of species needs one",
+                            names[a], names[b]
+                        ),
+                    ));
+                }
+            }
+        }
+        Ok(())
     }
 
     /// Checks `[hmc]`, `[chains]` and `[sweep]`.
@@ -1589,7 +1675,7 @@ fn check_terraces(k: usize, p: &PotentialSpec, t: &TerraceSpec) -> Result<(), Sc
     Ok(())
 }
 
-fn positive(key: &str, x: f64) -> Result<(), SceneError> {
+pub(crate) fn positive(key: &str, x: f64) -> Result<(), SceneError> {
     if x.is_finite() && x > 0.0 {
         Ok(())
     } else {
@@ -1612,7 +1698,13 @@ fn non_negative(key: &str, x: f64) -> Result<(), SceneError> {
 }
 
 fn check_steps(k: usize, steps: &[[f64; 2]]) -> Result<(), SceneError> {
-    let key = format!("pair[{k}].steps");
+    check_steps_at(&format!("pair[{k}].steps"), steps)
+}
+
+/// The checks of a table of `[radius, energy step]` at `key` (`pair[k].steps`,
+/// `site_pair[k].steps`).
+pub(crate) fn check_steps_at(key: &str, steps: &[[f64; 2]]) -> Result<(), SceneError> {
+    let key = key.to_owned();
     if steps.is_empty() {
         return Err(SceneError::invalid(
             key,

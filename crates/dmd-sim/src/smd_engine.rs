@@ -196,6 +196,19 @@ pub fn check(scene: &Scene) -> Result<(), SceneError> {
              --set",
         );
     }
+    if scene.has_sites() {
+        return refuse(
+            "species",
+            "site molecules interact through hard cores and square wells between their sites, \
+             which have no continuous force; run them with the event-driven engine",
+        );
+    }
+    if scene.pair.is_empty() {
+        return refuse(
+            "pair",
+            "standard MD needs a `[[pair]]` table with a smooth `potential`",
+        );
+    }
     if scene.species.len() > 1 {
         return refuse(
             "species",

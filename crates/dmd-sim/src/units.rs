@@ -114,6 +114,12 @@ impl Scene {
                 }
             }
         }
+        // Issue 10: site–site steps are energies too.
+        for p in &mut s.site_pair {
+            for step in &mut p.steps {
+                step[1] *= e;
+            }
+        }
         s.init.temperature *= u.temperature;
         if let Some(t) = &mut s.thermostat.temperature {
             *t *= u.temperature;
@@ -121,7 +127,9 @@ impl Scene {
         if let Some(t) = s.hmc.as_mut().and_then(|h| h.temperature.as_mut()) {
             *t *= u.temperature;
         }
+        // The grazing threshold of site molecules is a squared length, not an energy.
         if let Some(sr) = &mut s.search
+            && !self.has_sites()
             && let Some(g) = &mut sr.grid_threshold
         {
             *g *= e;

@@ -103,3 +103,21 @@ fn shipped_scenes_are_valid() {
     }
     assert!(n >= 1);
 }
+
+#[test]
+fn an_override_of_a_site_scene_gets_the_same_message_as_a_file() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/bad-scenes");
+    let good = dir.join("../../../../scenes/hard-dumbbells.toml");
+    for (file, set) in [
+        (
+            "sites-zero-elongation.toml",
+            "species.0.molecule.elongation=0.0",
+        ),
+        ("sites-unknown-impulse-rule.toml", "impulse.rule=lagrangian"),
+        ("sites-zero-window.toml", "search.window=0.0"),
+    ] {
+        let from_file = first_error_line(&dir.join(file), &[]).unwrap();
+        let from_override = first_error_line(&good, &[set.to_owned()]).unwrap();
+        assert_eq!(from_file, from_override, "{file} vs --set {set}");
+    }
+}
