@@ -764,7 +764,7 @@ fn gas(args: &Args, r: &mut Report, w: &mut String, dense: &Dense) -> Result<(),
     let t_star = 10.0;
     let (dmd_eq, dmd_ps) = if q { (5.0, 20.0) } else { (10.0, 200.0) };
     let (smd_eq, smd_ps) = if q { (1.0, 3.0) } else { (4.0, 20.0) };
-    let dts: &[f64] = if q { &[1.8, 0.9] } else { &[1.8, 0.9, 0.45] };
+    let dts: &[f64] = &[1.8, 0.9, 0.45];
     writeln!(
         w,
         "### Gas: T* = 10, ρ* = 0.01\n\n\
