@@ -148,7 +148,9 @@ impl Engine {
 }
 
 fn kt_label(dv: f64) -> String {
-    if dv >= 1.0 {
+    if dv == 1.0 {
+        "kT".to_owned()
+    } else if dv > 1.0 {
         format!("{dv}kT")
     } else {
         format!("kT/{}", (1.0 / dv).round())
@@ -408,7 +410,8 @@ fn dense(args: &Args, r: &mut Report, w: &mut String, work: &Path) -> Result<Den
     let q = args.quick;
     // Equilibration melts the simple-cubic start; 1 ps leaves DMD's NVE production 40 K too
     // hot (the lattice's potential energy still being released).
-    let (eq_ps, ps) = if q { (2.0, 2.0) } else { (10.0, 30.0) };
+    // Quick: 4 ps, so that the noise floor sits well below ΔV = kT's errors.
+    let (eq_ps, ps) = if q { (2.0, 4.0) } else { (10.0, 30.0) };
     let (cost_eq, cost_ps) = if q { (1.0, 0.5) } else { (3.0, 3.0) };
     let dvs: &[f64] = if q {
         &[1.0, 0.25]
