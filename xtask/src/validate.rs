@@ -120,6 +120,14 @@ pub(crate) const CHECKS: &[Check] = &[
         quick: &["--quick"],
     },
     Check {
+        name: "dmd-vs-smd",
+        title: "Event-driven against standard MD: error against run time, efficiency, Lennard-Jones convergence",
+        package: "dmd-sim",
+        example: "validate_compare",
+        full: &[],
+        quick: &["--quick"],
+    },
+    Check {
         name: "smd",
         title: "Standard MD reference: energy against time step and cost, reversibility, stability, Lennard-Jones against its equation of state",
         package: "dmd-smd",
