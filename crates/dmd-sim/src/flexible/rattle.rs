@@ -236,7 +236,7 @@ impl Constraints {
     /// kept).
     ///
     /// # Errors
-    /// As [`Constraints::shake`].
+    /// [`RattleError::Turned`], [`RattleError::Shake`].
     pub fn project_positions(&self, q: &mut [DVec3]) -> Result<(), RattleError> {
         let reference = q.to_vec();
         self.shake(&reference, q, None)
