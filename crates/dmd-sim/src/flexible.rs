@@ -801,8 +801,11 @@ impl Flexible {
             self.body_type[i as usize] as usize,
             self.body_type[j as usize] as usize,
         );
-        let before: usize = self.trajectories[i as usize].cached_steps()
-            + self.trajectories[j as usize].cached_steps();
+        // Steps behind the present are not needed again.
+        self.trajectories[i as usize].trim(now);
+        self.trajectories[j as usize].trim(now);
+        let before: usize = self.trajectories[i as usize].computed_steps()
+            + self.trajectories[j as usize].computed_steps();
         {
             let (traj_i, traj_j) = two(&mut self.trajectories, i as usize, j as usize);
             let mut geo = Geometry {
@@ -839,8 +842,8 @@ impl Flexible {
                 );
             }
         }
-        let after: usize = self.trajectories[i as usize].cached_steps()
-            + self.trajectories[j as usize].cached_steps();
+        let after: usize = self.trajectories[i as usize].computed_steps()
+            + self.trajectories[j as usize].computed_steps();
         self.flex.steps += after.saturating_sub(before) as u64;
         let mut root = (f64::INFINITY, 0usize, Boundary::Inner);
         let mut wait = f64::INFINITY;

@@ -281,16 +281,26 @@ fn rms(u: &[DVec3]) -> f64 {
     (u.iter().map(|x| x.length_squared()).sum::<f64>() / u.len() as f64).sqrt()
 }
 
+/// Steps held before [`Trajectory::trim`] drops those behind the present.
+pub const TRIM_AT: usize = 1024;
+
 /// The internal motion of one molecule from its last change: RATTLE steps of size `h` from
-/// time `t0`, computed on demand and kept (module documentation).
+/// time `t0`, computed on demand and kept (module documentation). Steps behind the loop's
+/// present can be dropped ([`Trajectory::trim`]), so a molecule that goes long without an event
+/// holds a bounded number of them.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Trajectory {
     t0: f64,
     h: f64,
     n: usize,
-    /// Positions of step `k` at `q[k n .. (k + 1) n]`.
+    /// The state at the last change (step 0), kept whatever is trimmed.
+    q0: Vec<DVec3>,
+    u0: Vec<DVec3>,
+    /// Index of the first step held.
+    first: usize,
+    /// Positions of step `first + k` at `q[k n .. (k + 1) n]`.
     q: Vec<DVec3>,
-    /// Velocities of step `k`, likewise.
+    /// Velocities likewise.
     u: Vec<DVec3>,
     failed: Option<RattleError>,
 }
@@ -303,6 +313,9 @@ impl Trajectory {
             t0,
             h,
             n: q.len(),
+            q0: q.to_vec(),
+            u0: u.to_vec(),
+            first: 0,
             q: q.to_vec(),
             u: u.to_vec(),
             failed: None,
@@ -312,10 +325,15 @@ impl Trajectory {
     /// Starts afresh from `(q, u)` at `t0` (the molecule changed).
     pub fn reset(&mut self, t0: f64, q: &[DVec3], u: &[DVec3]) {
         self.t0 = t0;
-        self.q.clear();
-        self.u.clear();
-        self.q.extend_from_slice(q);
-        self.u.extend_from_slice(u);
+        for v in [&mut self.q0, &mut self.q] {
+            v.clear();
+            v.extend_from_slice(q);
+        }
+        for v in [&mut self.u0, &mut self.u] {
+            v.clear();
+            v.extend_from_slice(u);
+        }
+        self.first = 0;
         self.failed = None;
     }
 
@@ -331,17 +349,35 @@ impl Trajectory {
 
     /// Positions and velocities at the last change.
     pub fn initial(&self) -> (&[DVec3], &[DVec3]) {
-        (&self.q[..self.n], &self.u[..self.n])
+        (&self.q0, &self.u0)
     }
 
-    /// Steps computed so far (including the initial state).
-    pub fn cached_steps(&self) -> usize {
+    /// Steps computed since the last change (including the initial state), held or trimmed.
+    pub fn computed_steps(&self) -> usize {
+        self.first + self.q.len() / self.n.max(1)
+    }
+
+    /// Steps held.
+    pub fn held_steps(&self) -> usize {
         self.q.len() / self.n.max(1)
     }
 
     /// Why the trajectory could not be continued, if it could not.
     pub fn failure(&self) -> Option<&RattleError> {
         self.failed.as_ref()
+    }
+
+    /// Drops the steps before the one containing `now` once more than [`TRIM_AT`] are held.
+    /// The loop never asks for a time before its present, so they are not needed again (if
+    /// one were, it would be computed afresh from the initial state, identically).
+    pub fn trim(&mut self, now: f64) {
+        let (k, _) = self.locate(now);
+        if self.held_steps() > TRIM_AT && k > self.first && k < self.computed_steps() {
+            let drop = (k - self.first) * self.n;
+            self.q.drain(..drop);
+            self.u.drain(..drop);
+            self.first = k;
+        }
     }
 
     /// Step index and fraction `s ∈ [0, 1)` of time `t` (times before `t0`, which the loop
@@ -356,13 +392,18 @@ impl Trajectory {
         (k as usize, x - k)
     }
 
-    /// Computes the steps up to index `k`.
+    /// Computes the steps up to index `k` (from the initial state again if `k` was trimmed).
     fn extend(&mut self, c: &Constraints, k: usize) -> Result<(), RattleError> {
         if let Some(e) = &self.failed {
             return Err(e.clone());
         }
         let n = self.n;
-        while self.q.len() < (k + 1) * n {
+        if k < self.first + 1 {
+            self.q.clone_from(&self.q0);
+            self.u.clone_from(&self.u0);
+            self.first = 0;
+        }
+        while self.computed_steps() < k + 1 {
             let last = self.q.len() - n;
             self.q.resize(last + 2 * n, DVec3::ZERO);
             self.u.resize(last + 2 * n, DVec3::ZERO);
@@ -392,12 +433,12 @@ impl Trajectory {
     ) -> Result<(DVec3, DVec3), RattleError> {
         let (k, s) = self.locate(t);
         self.extend(c, k + 1)?;
-        let n = self.n;
+        let (n, j) = (self.n, k - self.first);
         Ok(hermite(
             self.h,
             s,
-            (self.q[k * n + atom], self.u[k * n + atom]),
-            (self.q[(k + 1) * n + atom], self.u[(k + 1) * n + atom]),
+            (self.q[j * n + atom], self.u[j * n + atom]),
+            (self.q[(j + 1) * n + atom], self.u[(j + 1) * n + atom]),
         ))
     }
 
@@ -412,7 +453,7 @@ impl Trajectory {
     ) -> Result<(Vec<DVec3>, Vec<DVec3>), RattleError> {
         let (k, s) = self.locate(t);
         self.extend(c, k + 1)?;
-        Ok(self.interpolate(k, s, &self.q, &self.u))
+        Ok(self.interpolate(k - self.first, s, &self.q, &self.u))
     }
 
     /// As [`Trajectory::state_at`], without keeping new steps (for the read-only checks): steps
@@ -422,21 +463,21 @@ impl Trajectory {
     /// The RATTLE step that failed.
     pub fn peek(&self, c: &Constraints, t: f64) -> Result<(Vec<DVec3>, Vec<DVec3>), RattleError> {
         let (k, s) = self.locate(t);
-        if (k + 2) * self.n <= self.q.len() {
-            return Ok(self.interpolate(k, s, &self.q, &self.u));
+        if k >= self.first && k + 2 <= self.computed_steps() {
+            return Ok(self.interpolate(k - self.first, s, &self.q, &self.u));
         }
         if let Some(e) = &self.failed {
             return Err(e.clone());
         }
-        // Continue from the last cached step only.
-        let have = self.cached_steps() - 1;
-        let n = self.n;
-        let mut scratch = Trajectory::new(
-            self.t0 + have as f64 * self.h,
-            self.h,
-            &self.q[have * n..],
-            &self.u[have * n..],
-        );
+        // Continue from the last held step, or from the start for a trimmed one.
+        let (have, q, u) = if k < self.first {
+            (0, &self.q0[..], &self.u0[..])
+        } else {
+            let last = self.held_steps() - 1;
+            let n = self.n;
+            (self.first + last, &self.q[last * n..], &self.u[last * n..])
+        };
+        let mut scratch = Trajectory::new(self.t0 + have as f64 * self.h, self.h, q, u);
         scratch.extend(c, k + 1 - have)?;
         Ok(scratch.interpolate(k - have, s, &scratch.q, &scratch.u))
     }
@@ -613,10 +654,28 @@ mod tests {
         let (qm, _) = t.state_at(&c, 2.0337).unwrap();
         assert!(c.violation(&qm) < 1e-7, "{:e}", c.violation(&qm));
         // Peeking beyond the cache agrees with computing, and keeps nothing.
-        let before = t.cached_steps();
+        let before = t.computed_steps();
         let (qp, up) = t.peek(&c, 2.4321).unwrap();
-        assert_eq!(t.cached_steps(), before);
+        assert_eq!(t.computed_steps(), before);
         let (qc, uc) = t.state_at(&c, 2.4321).unwrap();
         assert_eq!((qp, up), (qc, uc));
+    }
+
+    #[test]
+    fn trimming_keeps_the_trajectory() {
+        let (q, u, c) = chain();
+        let mut t = Trajectory::new(0.0, 0.001, &q, &u);
+        let (early, late) = (0.4567, 1.7891);
+        let a = t.state_at(&c, early).unwrap();
+        let b = t.state_at(&c, late).unwrap();
+        assert!(t.held_steps() > TRIM_AT);
+        t.trim(late);
+        assert!(t.held_steps() <= 2, "{}", t.held_steps());
+        assert_eq!(t.computed_steps(), 1791);
+        // The same states after trimming: held, peeked and recomputed from the start.
+        assert_eq!(t.state_at(&c, late).unwrap(), b);
+        assert_eq!(t.peek(&c, early).unwrap(), a);
+        assert_eq!(t.state_at(&c, early).unwrap(), a);
+        assert_eq!(t.initial(), (&q[..], &u[..]));
     }
 }
