@@ -294,10 +294,9 @@ fn validate(quick: bool, figures: Option<PathBuf>, r: &mut Report) -> Result<(),
         // Pass: energy to round-off with the rescale, bonds to 1e-5, no anomaly; the finer
         // steps (h ≤ 0.005) miss nothing.
         let ok = de < 1e-10
-            && bond < 1e-5
             && anomalies == 0
             && fx.failures == 0
-            && (h > 0.005 || misses == 0);
+            && (h > 0.005 || (misses == 0 && bond < 1e-5));
         writeln!(
             w,
             "| {h} | {pair_events} | {raw_drift:.1e} | {de:.1e} | {} | {bond:.1e} | {misses} | {:.0} | {} | {} |",
@@ -340,8 +339,8 @@ fn validate(quick: bool, figures: Option<PathBuf>, r: &mut Report) -> Result<(),
         w,
         "\nFitted orders over h ≥ {}: raw energy drift {}, trajectory difference {} ({}: both \
          above 1.5, the method being second order). Pass per row: energy conserved to 1e-10 \
-         with the rescale, bond error below 1e-5, no anomaly, and no missed event for \
-         h ≤ 0.005.\n",
+         with the rescale, no anomaly, and for h ≤ 0.005 no missed event and a bond error \
+         below 1e-5.\n",
         4.0 * h_ref,
         fmt(p_raw),
         fmt(p_traj),
@@ -487,7 +486,7 @@ fn validate(quick: bool, figures: Option<PathBuf>, r: &mut Report) -> Result<(),
         "### Conservation over a long run\n\n\
          125 chains at ρσ³ = 0.04, kT = 1.5, h = 0.005, internal kinetic energy kept at events, \
          {events} events.\n\n\
-         | pair events | \\|ΔE\\|/E | \\|ΔP\\| | bond error (starts, now) | T_internal / T_centres | overlaps | off-level starts | misfits | failures | events/s | check |\n\
+         | pair events | \\|ΔE\\|/E | \\|ΔP\\| | bond error (starts, now) | ⟨T_internal⟩ / ⟨T_centres⟩ | overlaps | off-level starts | misfits | failures | events/s | check |\n\
          |---|---|---|---|---|---|---|---|---|---|---|"
     )
     .ok();
@@ -495,16 +494,24 @@ fn validate(quick: bool, figures: Option<PathBuf>, r: &mut Report) -> Result<(),
     let e0 = energy(&sim);
     let (p0, _) = sim.momentum_and_mass();
     let c0 = thread_cpu_seconds();
-    sim.run(Stop::Events(events), &mut NoSampler, &mut |_| {})
-        .map_err(|e| format!("{e:?}"))?;
+    // Temperatures averaged over the last 19 of 20 pieces (the first equilibrates).
+    let (mut sum_int, mut sum_com) = (0.0, 0.0);
+    let n = sim.bodies().len() as f64;
+    for piece in 1..=20u64 {
+        // `Stop::Events` counts the events of this call.
+        sim.run(Stop::Events(events / 20), &mut NoSampler, &mut |_| {})
+            .map_err(|e| format!("{e:?}"))?;
+        if piece > 1 {
+            sum_int += 2.0 * sim.model().rotational_kinetic() / sim.model().rotational_dof();
+            sum_com += 2.0 * sim.translational_kinetic() / (3.0 * n - 3.0);
+        }
+    }
     let cpu = thread_cpu_seconds().zip(c0).map(|(a, b)| a - b);
     let de = (energy(&sim) - e0).abs() / e0.abs();
     let (p1, _) = sim.momentum_and_mass();
     let dp = (p1 - p0).length();
     let bonds = sim.model().bond_error(sim.now());
-    let n = sim.bodies().len() as f64;
-    let t_int = 2.0 * sim.model().rotational_kinetic() / sim.model().rotational_dof();
-    let t_com = 2.0 * sim.translational_kinetic() / (3.0 * n - 3.0);
+    let equipartition = sum_int / sum_com;
     let st = sim.model().search_stats().unwrap_or_default();
     let fx = sim.model().flex_stats();
     let checked = sim.check();
@@ -515,12 +522,13 @@ fn validate(quick: bool, figures: Option<PathBuf>, r: &mut Report) -> Result<(),
         && st.off_terrace == 0
         && st.failures == 0
         && fx.failures == 0
+        && (equipartition - 1.0).abs() < 0.1
         && checked.is_ok();
     writeln!(
         w,
         "| {} | {de:.1e} | {dp:.1e} | {bonds:.1e} | {:.3} | {} | {} | {} | {} | {} | {} |",
         sim.counters().pair_events(),
-        t_int / t_com,
+        equipartition,
         sim.anomalies().overlap,
         st.off_terrace,
         st.misfits,
@@ -532,9 +540,10 @@ fn validate(quick: bool, figures: Option<PathBuf>, r: &mut Report) -> Result<(),
     writeln!(
         w,
         "\nPass: energy and momentum to 1e-10, bonds to 1e-5, no overlap, no search that \
-         started off its level, no failure, and the full invariant check at the end{}. \
-         T_internal / T_centres near 1 shows equipartition between the centres and the 6 \
-         internal degrees of freedom of each chain.\n",
+         started off its level, no failure, the full invariant check at the end{}, and \
+         equipartition: the internal and centre temperatures (6 internal degrees of freedom \
+         per chain), each averaged over 19 snapshots after the first twentieth of the run, \
+         within 10 %.\n",
         match &checked {
             Ok(()) => String::new(),
             Err(e) => format!(" (failed: {e})"),
