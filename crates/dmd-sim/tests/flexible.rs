@@ -349,3 +349,37 @@ fn a_rigid_molecule_follows_the_rigid_engine() {
     assert!(d1 < 5e-3, "{d1:e}");
     assert!(d2 < 0.4 * d1, "{d2:e} vs {d1:e}");
 }
+
+/// Thermostat collisions draw the internal velocities from the constrained Maxwell–Boltzmann
+/// distribution: the internal and centre temperatures both relax to the bath's.
+#[test]
+fn a_thermostat_brings_the_internal_motion_to_the_bath_temperature() {
+    let mut sim = chains(0.04, 0.5, 0.005, true, 6);
+    sim.set_thermostat(Some(dmd_sim::simulation::Andersen {
+        rate: 10.0,
+        temperature: 2.5,
+    }));
+    sim.run(Stop::Time(0.5), &mut NoSampler, &mut |_| {})
+        .unwrap();
+    let n = sim.bodies().len() as f64;
+    let (mut t_int, mut t_com) = (0.0, 0.0);
+    for k in 1..=20 {
+        sim.run(
+            Stop::Time(0.5 + 0.05 * k as f64),
+            &mut NoSampler,
+            &mut |_| {},
+        )
+        .unwrap();
+        t_int += 2.0 * sim.model().rotational_kinetic() / sim.model().rotational_dof() / 20.0;
+        t_com += 2.0 * sim.translational_kinetic() / (3.0 * n) / 20.0;
+    }
+    eprintln!("T_int {t_int}, T_com {t_com}, {:?}", sim.counters());
+    assert!(sim.counters().thermostat > 1000);
+    assert!((t_int / 2.5 - 1.0).abs() < 0.06, "T_int {t_int}");
+    assert!((t_com / 2.5 - 1.0).abs() < 0.06, "T_com {t_com}");
+    // The bookkeeping of the thermostat's energy follows the recomputed energy.
+    let e = energy(&sim);
+    let tracked = sim.tracked_kinetic() + sim.tracked_potential();
+    assert!((tracked - e).abs() < 1e-9 * e.abs(), "{tracked} vs {e}");
+    sim.check().unwrap();
+}
