@@ -430,6 +430,9 @@ enum Pending {
     Sites(Vec<SiteSearch>),
     /// The pair event is for site pair `k` at `boundary`.
     Fire(u32, Boundary),
+    /// A RATTLE step of one of the molecules failed: the pair's event, due at once, reports it
+    /// (the loop stops with the error instead of running on without the pair's events).
+    Broken,
 }
 
 /// One site pair of a pair of molecule types.
@@ -845,6 +848,12 @@ impl Flexible {
         let after: usize = self.trajectories[i as usize].computed_steps()
             + self.trajectories[j as usize].computed_steps();
         self.flex.steps += after.saturating_sub(before) as u64;
+        if self.trajectories[i as usize].failure().is_some()
+            || self.trajectories[j as usize].failure().is_some()
+        {
+            self.set_pending(i, j, now, Pending::Broken);
+            return Some((0.0, Kind::Pair(Boundary::Inner)));
+        }
         let mut root = (f64::INFINITY, 0usize, Boundary::Inner);
         let mut wait = f64::INFINITY;
         for (k, s) in sites.iter().enumerate() {
@@ -1135,8 +1144,9 @@ impl Searcher<'_> {
 }
 
 /// The error an impulse reports for a molecule whose RATTLE trajectory broke.
-const BROKEN: CollideError = CollideError::NoImpulse(
-    "a semi-flexible molecule's RATTLE trajectory failed (the step is too long for its motion)",
+const BROKEN: CollideError = CollideError::FreeMotion(
+    "a RATTLE step of a semi-flexible molecule failed (a bond turned by about a right angle \
+     within one step, or SHAKE did not converge): the step h is too long for its internal motion",
 );
 
 impl PairModel for Flexible {
@@ -1220,7 +1230,7 @@ impl PairModel for Flexible {
         match self.take_pending(i, j, now)? {
             Pending::Later => self.start_sites(i, j, now, dr, dv),
             Pending::Sites(sites) => self.advance(i, j, now, dr, dv, sites, false),
-            Pending::Fire(..) => None,
+            Pending::Fire(..) | Pending::Broken => None,
         }
     }
 
@@ -1242,8 +1252,10 @@ impl PairModel for Flexible {
             virial: 0.0,
             overlap,
         };
-        let Some(Pending::Fire(k, boundary)) = self.take_pending(i, j, now) else {
-            return Ok(skipped(false));
+        let (k, boundary) = match self.take_pending(i, j, now) {
+            Some(Pending::Fire(k, boundary)) => (k, boundary),
+            Some(Pending::Broken) => return Err(BROKEN),
+            _ => return Ok(skipped(false)),
         };
         let tp = self.type_pair(i, j);
         let sp = self.type_pairs[tp].pairs[k as usize];

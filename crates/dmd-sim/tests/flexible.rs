@@ -383,3 +383,16 @@ fn a_thermostat_brings_the_internal_motion_to_the_bath_temperature() {
     assert!((tracked - e).abs() < 1e-9 * e.abs(), "{tracked} vs {e}");
     sim.check().unwrap();
 }
+
+/// A RATTLE step too long for the motion stops the run with an error naming it; it never runs
+/// on with pairs that lost their events.
+#[test]
+fn a_failed_rattle_step_stops_the_run() {
+    let mut sim = chains(0.04, 40.0, 0.06, true, 7);
+    let err = sim
+        .run(Stop::Time(20.0), &mut NoSampler, &mut |_| {})
+        .unwrap_err();
+    let text = format!("{err}");
+    eprintln!("{text}");
+    assert!(text.contains("RATTLE"), "{text}");
+}
