@@ -486,8 +486,8 @@ fn validate(quick: bool, figures: Option<PathBuf>, r: &mut Report) -> Result<(),
         "### Conservation over a long run\n\n\
          125 chains at ρσ³ = 0.04, kT = 1.5, h = 0.005, internal kinetic energy kept at events, \
          {events} events.\n\n\
-         | pair events | \\|ΔE\\|/E | \\|ΔP\\| | bond error (starts, now) | ⟨T_internal⟩ / ⟨T_centres⟩ | overlaps | off-level starts | misfits | failures | events/s | check |\n\
-         |---|---|---|---|---|---|---|---|---|---|---|"
+         | pair events | \\|ΔE\\|/E | \\|ΔP\\| | bond error (starts, now) | ⟨T_internal⟩ / ⟨T_centres⟩ | overlaps | off-level starts | misfits | failures | RATTLE steps per event | indicator evaluations per event | events/s | check |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|---|---|"
     )
     .ok();
     let mut sim = chains(0.04, 1.5, rattle(0.005, true), search(None), 5)?;
@@ -526,17 +526,47 @@ fn validate(quick: bool, figures: Option<PathBuf>, r: &mut Report) -> Result<(),
         && checked.is_ok();
     writeln!(
         w,
-        "| {} | {de:.1e} | {dp:.1e} | {bonds:.1e} | {:.3} | {} | {} | {} | {} | {} | {} |",
+        "| {} | {de:.1e} | {dp:.1e} | {bonds:.1e} | {:.3} | {} | {} | {} | {} | {:.1} | {:.0} | {} | {} |",
         sim.counters().pair_events(),
         equipartition,
         sim.anomalies().overlap,
         st.off_terrace,
         st.misfits,
         st.failures + fx.failures,
+        fx.steps as f64 / events as f64,
+        st.evaluations as f64 / events as f64,
         cpu.map_or("–".into(), |t| format!("{:.2e}", events as f64 / t)),
         r.check(ok)
     )
     .ok();
+    // The share of RATTLE in the run: one chain's steps timed alone.
+    let ns_per_step = {
+        let t = chain()?;
+        let c = dmd_sim::flexible::Constraints::new(t.masses(), t.bonds(), t.lengths(), 1e-12);
+        let (q, u) = random_internal(std::slice::from_ref(&t), &[0], 1.5, 3);
+        let mut traj = dmd_sim::flexible::Trajectory::new(0.0, 0.005, &q[0], &u[0]);
+        let steps = 200_000;
+        let c0 = thread_cpu_seconds();
+        for k in (0..steps).step_by(1000) {
+            traj.state_at(&c, 0.005 * k as f64)
+                .map_err(|e| e.to_string())?;
+            traj.trim(0.005 * k as f64);
+        }
+        thread_cpu_seconds()
+            .zip(c0)
+            .map(|(a, b)| (a - b) / steps as f64 * 1e9)
+    };
+    if let (Some(ns), Some(total)) = (ns_per_step, cpu) {
+        writeln!(
+            w,
+            "\nOne RATTLE step of a chain costs {ns:.0} ns (timed alone): the {:.1} steps per \
+             event are {:.0} % of the run's CPU time; the rest is the searches (indicator \
+             evaluations: two Hermite interpolations each), events and the loop.",
+            fx.steps as f64 / events as f64,
+            100.0 * ns * 1e-9 * fx.steps as f64 / total
+        )
+        .ok();
+    }
     writeln!(
         w,
         "\nPass: energy and momentum to 1e-10, bonds to 1e-5, no overlap, no search that \

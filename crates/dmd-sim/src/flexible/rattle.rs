@@ -12,13 +12,18 @@
 //! u' = u½ − Σ_α μ_α w_k (q'_a − q'_b)(±)           with (q'_a − q'_b)·(u'_a − u'_b) = 0.
 //! ```
 //!
-//! Both multiplier sets are found by the usual bond-by-bond iteration (SHAKE for `λ`, its
-//! linear analogue for `μ`) to the relative tolerance [`Constraints::tolerance`]: a bond is
-//! converged when `|r² − d²| ≤ 2 tol d²` (its length is right to `tol`), a velocity constraint
-//! when `|r·ṙ| ≤ tol d v` with `v` the r.m.s. atom speed. A SHAKE update divides by
-//! `r'·r` (the bond now and a step ago): a bond that turned by nearly a right angle in one
-//! step, or an iteration that has not converged after [`MAX_ITERATIONS`] sweeps, is an error
-//! ([`RattleError`]) — the step is too long for the motion — never a silently wrong state.
+//! Both multiplier sets are solved for all bonds at once: `λ` by Newton's method on the bond
+//! equations (matrix SHAKE: the matrix `r'_α·r_β (w s)` of the bonds now and a step ago, a
+//! small dense solve per iteration, quadratic convergence), `μ` by one solve of the linear
+//! system with the `Z` matrix of 000 §II.A at the new positions (and a refinement if needed),
+//! to the relative tolerance [`Constraints::tolerance`]: a bond is converged when
+//! `|r² − d²| ≤ 2 tol d²` (its length is right to `tol`), a velocity constraint when
+//! `|r·ṙ| ≤ tol d v` with `v` the r.m.s. atom speed. The bond-by-bond sweeps of the original
+//! SHAKE converge only linearly along a chain (a step cost twice as much with them). A bond
+//! that turned by nearly a right angle in one step (`r'·r` small: the corrections along the
+//! old bond cannot restore its length), a singular matrix, or no convergence after
+//! [`MAX_NEWTON`] iterations is an error ([`RattleError`]) — the step is too long for the
+//! motion — never a silently wrong state.
 //!
 //! RATTLE is symplectic and time-reversible on the constraint manifold: the bond lengths hold to
 //! the tolerance at every step, the linear and angular momenta of the atoms are conserved (the
@@ -35,8 +40,9 @@
 use collide::Bond;
 use glam::DVec3;
 
-/// Sweeps of the SHAKE or velocity iteration before it is declared not converged.
-pub const MAX_ITERATIONS: usize = 500;
+/// Newton iterations of the position stage before it is declared not converged (it converges
+/// quadratically: a handful suffice unless the step is far too long).
+pub const MAX_NEWTON: usize = 50;
 
 /// A bond whose `r'·r` is below this fraction of `d²` has turned by nearly a right angle within
 /// one step: the SHAKE update along the old bond cannot restore its length.
@@ -47,7 +53,7 @@ const TURN_LIMIT: f64 = 1e-3;
 pub enum RattleError {
     /// SHAKE did not converge.
     #[error(
-        "SHAKE did not converge in {MAX_ITERATIONS} sweeps (largest relative bond error \
+        "SHAKE did not converge in {MAX_NEWTON} Newton iterations (largest relative bond error \
          {violation:e}): the RATTLE step is too long for the motion, or the bonds are dependent"
     )]
     Shake {
@@ -56,7 +62,7 @@ pub enum RattleError {
     },
     /// The velocity stage did not converge.
     #[error(
-        "the RATTLE velocity stage did not converge in {MAX_ITERATIONS} sweeps (largest \
+        "the RATTLE velocity stage did not converge in four solves (largest \
          relative rate {violation:e}): the bonds are (nearly) dependent"
     )]
     Velocity {
@@ -137,65 +143,108 @@ impl Constraints {
             .fold(0.0, f64::max)
     }
 
-    /// Moves positions `q` onto the constraints by SHAKE corrections along the bonds of the
-    /// reference positions `reference` (`q` itself for a projection): each correction is
-    /// mass-weighted, so the centre of mass does not move. `shift` receives the displacement
-    /// of every atom (used for the velocity of a RATTLE step).
+    /// `s(k, β)`: +1 if atom `k` is bond `β`'s first atom, −1 if its second, else 0, times
+    /// `w_k`: the weight with which a correction along bond `β` moves atom `k`.
+    #[inline]
+    fn weight(&self, k: usize, beta: usize) -> f64 {
+        let b = self.bonds[beta];
+        if k == b.a {
+            self.inv_mass[k]
+        } else if k == b.b {
+            -self.inv_mass[k]
+        } else {
+            0.0
+        }
+    }
+
+    /// The matrix `M_αβ = x_α·y_β (w s)(a_α, β) − x_α·y_β (w s)(b_α, β)`: the change of
+    /// `x_α·r_α` per unit multiplier of bond `β` moving atoms along `y_β`. With `x = y` it is
+    /// the `Z` matrix of 000 §II.A.
+    fn matrix(&self, x: &[DVec3], y: &[DVec3], m: &mut Vec<f64>) {
+        let nb = self.bonds.len();
+        m.clear();
+        m.resize(nb * nb, 0.0);
+        for (al, b) in self.bonds.iter().enumerate() {
+            for be in 0..nb {
+                let c = self.weight(b.a, be) - self.weight(b.b, be);
+                if c != 0.0 {
+                    m[al * nb + be] = c * x[al].dot(y[be]);
+                }
+            }
+        }
+    }
+
+    /// Moves atoms by `g_β` along `w_k s(k, β) y_β` for every bond.
+    fn apply(&self, g: &[f64], y: &[DVec3], q: &mut [DVec3], mut shift: Option<&mut [DVec3]>) {
+        for ((b, &gb), &yb) in self.bonds.iter().zip(g).zip(y) {
+            let (da, db) = (gb * self.inv_mass[b.a] * yb, gb * self.inv_mass[b.b] * yb);
+            q[b.a] += da;
+            q[b.b] -= db;
+            if let Some(sh) = shift.as_deref_mut() {
+                sh[b.a] += da;
+                sh[b.b] -= db;
+            }
+        }
+    }
+
+    /// Moves positions `q` onto the constraints by corrections along the bonds of the reference
+    /// positions `reference` (`q` itself for a projection): mass-weighted, so the centre of mass
+    /// does not move. All multipliers at once by Newton's method on the bond equations
+    /// (matrix SHAKE: quadratic convergence, a few small solves, instead of the bond-by-bond
+    /// sweeps that converge linearly along a chain). `shift` receives the displacement of every
+    /// atom (used for the velocity of a RATTLE step).
     ///
     /// # Errors
-    /// [`RattleError::Turned`], [`RattleError::Shake`].
+    /// [`RattleError::Turned`], [`RattleError::Shake`], [`RattleError::NotFinite`].
     fn shake(
         &self,
         reference: &[DVec3],
         q: &mut [DVec3],
         mut shift: Option<&mut [DVec3]>,
     ) -> Result<(), RattleError> {
+        let nb = self.bonds.len();
         let tol2 = 2.0 * self.tolerance;
-        for _ in 0..MAX_ITERATIONS {
-            let mut worst: f64 = 0.0;
-            for (k, (b, &d2)) in self.bonds.iter().zip(&self.length2).enumerate() {
+        let old: Vec<DVec3> = self
+            .bonds
+            .iter()
+            .map(|b| reference[b.a] - reference[b.b])
+            .collect();
+        let (mut m, mut res) = (Vec::with_capacity(nb * nb), vec![0.0; nb]);
+        let mut now = vec![DVec3::ZERO; nb];
+        let mut worst = f64::INFINITY;
+        for _ in 0..MAX_NEWTON {
+            worst = 0.0;
+            for (al, (b, &d2)) in self.bonds.iter().zip(&self.length2).enumerate() {
                 let s = q[b.a] - q[b.b];
-                let diff = d2 - s.length_squared();
-                let rel = diff.abs() / d2;
-                worst = worst.max(rel);
-                if rel <= tol2 {
-                    continue;
-                }
-                let r = reference[b.a] - reference[b.b];
-                let (wa, wb) = (self.inv_mass[b.a], self.inv_mass[b.b]);
-                let dot = s.dot(r);
+                now[al] = s;
+                res[al] = 0.5 * (d2 - s.length_squared());
+                worst = worst.max(2.0 * res[al].abs() / d2);
+                let dot = s.dot(old[al]);
                 if dot.is_nan() || dot <= TURN_LIMIT * d2 {
                     return Err(if dot.is_finite() {
-                        RattleError::Turned { bond: k }
+                        RattleError::Turned { bond: al }
                     } else {
                         RattleError::NotFinite
                     });
-                }
-                // |s + g (w_a + w_b) r|² = d² to first order in g.
-                let g = diff / (2.0 * (wa + wb) * dot);
-                q[b.a] += g * wa * r;
-                q[b.b] -= g * wb * r;
-                if let Some(sh) = shift.as_deref_mut() {
-                    sh[b.a] += g * wa * r;
-                    sh[b.b] -= g * wb * r;
                 }
             }
             if worst <= tol2 {
                 return Ok(());
             }
+            // Σ_β M_αβ g_β = (d² − |r'_α|²)/2, M from the bonds now (x) and before (y).
+            self.matrix(&now, &old, &mut m);
+            if !solve(&mut m, &mut res) {
+                return Err(RattleError::Shake { violation: worst });
+            }
+            self.apply(&res, &old, q, shift.as_deref_mut());
         }
-        let violation = self
-            .bonds
-            .iter()
-            .zip(&self.length2)
-            .map(|(b, &d2)| (d2 - (q[b.a] - q[b.b]).length_squared()).abs() / (2.0 * d2))
-            .fold(0.0, f64::max);
-        Err(RattleError::Shake { violation })
+        Err(RattleError::Shake { violation: worst })
     }
 
     /// Projects velocities `u` onto the tangent of the constraints at positions `q` (the RATTLE
     /// velocity stage): mass-weighted corrections along the bonds, so the total momentum does
-    /// not change, until every bond rate vanishes to the tolerance.
+    /// not change, from one solve of `Z μ = (r_α·ṙ_α)` (000 §II.A) and a refinement if the
+    /// rates are not yet below the tolerance.
     ///
     /// # Errors
     /// [`RattleError::Velocity`], [`RattleError::NotFinite`].
@@ -207,25 +256,29 @@ impl Constraints {
         if v == 0.0 {
             return Ok(());
         }
+        let nb = self.bonds.len();
         let tol = self.tolerance * v;
-        for _ in 0..MAX_ITERATIONS {
+        let r: Vec<DVec3> = self.bonds.iter().map(|b| q[b.a] - q[b.b]).collect();
+        let (mut m, mut rate) = (Vec::with_capacity(nb * nb), vec![0.0; nb]);
+        for _ in 0..4 {
             let mut worst: f64 = 0.0;
-            for (b, &d2) in self.bonds.iter().zip(&self.length2) {
-                let s = q[b.a] - q[b.b];
-                let rate = s.dot(u[b.a] - u[b.b]);
-                let rel = rate.abs() / d2.sqrt();
-                worst = worst.max(rel);
-                if rel <= tol {
-                    continue;
-                }
-                let (wa, wb) = (self.inv_mass[b.a], self.inv_mass[b.b]);
-                let k = rate / ((wa + wb) * s.length_squared());
-                u[b.a] -= k * wa * s;
-                u[b.b] += k * wb * s;
+            for ((b, &d2), (x, ra)) in self
+                .bonds
+                .iter()
+                .zip(&self.length2)
+                .zip(rate.iter_mut().zip(&r))
+            {
+                *x = -ra.dot(u[b.a] - u[b.b]);
+                worst = worst.max(x.abs() / d2.sqrt());
             }
             if worst <= tol {
                 return Ok(());
             }
+            self.matrix(&r, &r, &mut m);
+            if !solve(&mut m, &mut rate) {
+                break;
+            }
+            self.apply(&rate, &r, u, None);
         }
         Err(RattleError::Velocity {
             violation: self.rate_violation(q, u),
@@ -271,6 +324,45 @@ impl Constraints {
             Err(RattleError::NotFinite)
         }
     }
+}
+
+/// Solves `m x = b` (`m` row major, `b.len()` square) in place by Gaussian elimination with
+/// partial pivoting; `false` for a (numerically) singular `m`.
+fn solve(m: &mut [f64], b: &mut [f64]) -> bool {
+    let n = b.len();
+    let scale = m.iter().fold(0.0_f64, |s, x| s.max(x.abs()));
+    for col in 0..n {
+        let piv = (col..n)
+            .max_by(|&x, &y| m[x * n + col].abs().total_cmp(&m[y * n + col].abs()))
+            .unwrap_or(col);
+        let p = m[piv * n + col];
+        if p.is_nan() || p.abs() <= 1e-14 * scale {
+            return false;
+        }
+        if piv != col {
+            for k in 0..n {
+                m.swap(piv * n + k, col * n + k);
+            }
+            b.swap(piv, col);
+        }
+        for row in col + 1..n {
+            let f = m[row * n + col] / p;
+            if f != 0.0 {
+                for k in col..n {
+                    m[row * n + k] -= f * m[col * n + k];
+                }
+                b[row] -= f * b[col];
+            }
+        }
+    }
+    for row in (0..n).rev() {
+        let mut s = b[row];
+        for k in row + 1..n {
+            s -= m[row * n + k] * b[k];
+        }
+        b[row] = s / m[row * n + row];
+    }
+    true
 }
 
 /// Root mean square of vectors' lengths.
