@@ -11,8 +11,11 @@
 //! positions and velocities relative to the centre at its last change and propagates them by
 //! RATTLE with a fixed step `h` ([`RattleSettings::step`]); positions between steps are the
 //! cubic Hermite interpolant of the two neighbouring steps, velocities its derivative
-//! ([`rattle`] module). The steps computed are kept until the molecule's next event, so the
-//! root searches of all its pairs share them. This is the scheme the paper's conclusion
+//! ([`rattle`] module). The steps computed are kept until the molecule's next event (those
+//! behind the present are dropped once more than [`rattle::TRIM_AT`] are held), so the root
+//! searches of all its pairs share them. A RATTLE step that fails (too long for the motion)
+//! makes the pair's event due at once, and executing it stops the run with
+//! [`CollideError::FreeMotion`]: never a pair left without events. This is the scheme the paper's conclusion
 //! proposes for semi-flexible bodies (000 §VI: SHAKE or RATTLE with the root searches of §III).
 //!
 //! **Event search.** As in [`sites`](crate::sites): each site pair of two molecules on level `s`
@@ -60,10 +63,16 @@
 //! the model reports the kinetic energy its integration brought in at each event
 //! ([`PairModel::take_kinetic_error`]).
 //!
+//! **Thermostat.** An Andersen collision of a molecule draws its centre velocity (the loop) and
+//! its internal velocities: Gaussian atom velocities, the centre's taken off, projected onto the
+//! tangent of the bonds (mass-orthogonally), which is the Maxwell–Boltzmann distribution of the
+//! constrained internal motion.
+//!
 //! **Not modelled.** Atoms of the same molecule do not interact (no intramolecular excluded
 //! volume or wells: the loop has no events of one body with itself), and the constraint
 //! system's phase-space metric `det Z` (000 §II.A) is not corrected for: the dynamics is the
-//! constrained Lagrangian one, as the paper's.
+//! constrained Lagrangian one, as the paper's. Checkpoints and HMC rollbacks cannot restore the
+//! internal states and site-pair levels (refused with an error, as for `sites`).
 
 pub mod rattle;
 
