@@ -172,6 +172,12 @@ pub enum FlexibleError {
     /// A search setting is out of range.
     #[error("bad search setting: {0}")]
     Search(SearchError),
+    /// The search settings are unusable otherwise.
+    #[error("bad search settings: {0}")]
+    Settings(String),
+    /// More atoms than a site-pair table can index.
+    #[error("a molecule of {0} atoms: at most 65535 are supported")]
+    TooManyAtoms(usize),
 }
 
 /// A semi-flexible molecule type: atoms, site species, bonds and their lengths.
@@ -197,6 +203,9 @@ impl FlexibleType {
         let n = atoms.len();
         if n < 2 {
             return Err(FlexibleError::TooFewAtoms(n));
+        }
+        if n > usize::from(u16::MAX) {
+            return Err(FlexibleError::TooManyAtoms(n));
         }
         for (k, a) in atoms.iter().enumerate() {
             if !(a.mass.is_finite() && a.mass > 0.0) {
@@ -529,10 +538,7 @@ impl Flexible {
         rattle.check()?;
         check_settings(&settings).map_err(|e| match e {
             crate::sites::SitesError::Search(s) => FlexibleError::Search(s),
-            other => FlexibleError::Body {
-                body: 0,
-                problem: other.to_string(),
-            },
+            other => FlexibleError::Settings(other.to_string()),
         })?;
         let ns = potentials.n_species();
         for t in &types {
