@@ -116,8 +116,18 @@ fn lattice_for(k: usize, rho: f64, reach: f64) -> (f64, Vec<DVec3>) {
 
 /// A gas of chains at density `rho` and temperature `kt`.
 fn chains(rho: f64, kt: f64, h: f64, rescale: bool, seed: u64) -> Simulation<Flexible, Queue> {
+    chains_with(rho, kt, h, rescale, seed, search(0.02, 0.1))
+}
+
+fn chains_with(
+    rho: f64,
+    kt: f64,
+    h: f64,
+    rescale: bool,
+    seed: u64,
+    s: SearchSettings,
+) -> Simulation<Flexible, Queue> {
     let types = vec![chain()];
-    let s = search(0.02, 0.1);
     let rattle = RattleSettings {
         rescale,
         ..rattle(h)
@@ -212,6 +222,14 @@ fn a_gas_of_chains_conserves_momentum_energy_and_bonds() {
         (0, 0, 0, 0)
     );
     assert!((sim.tracked_potential() - sim.potential_energy()).abs() < 1e-9);
+    // The bounding radii hold every atom however the chain has flexed.
+    let radii = sim.model().types()[0].radii().to_vec();
+    for i in 0..sim.bodies().len() as u32 {
+        let (q, _) = sim.model().internal_state(i, sim.now()).unwrap();
+        for (x, r) in q.iter().zip(&radii) {
+            assert!(x.length() <= *r, "molecule {i}: {} > {r}", x.length());
+        }
+    }
     // The bonds hold to the SHAKE tolerance at the RATTLE steps, to the interpolation error
     // (O(h³): a RATTLE step's local error) between them and at the starts.
     let bonds = sim.model().bond_error(sim.now());
@@ -395,4 +413,37 @@ fn a_failed_rattle_step_stops_the_run() {
     let text = format!("{err}");
     eprintln!("{text}");
     assert!(text.contains("RATTLE"), "{text}");
+}
+
+/// Virtual events change nothing (the suspended searches resume on the same RATTLE steps), and
+/// the grid search with the same step finds the same events as the adaptive one.
+#[test]
+fn virtual_events_and_the_search_method_do_not_change_the_trajectory() {
+    let run = |s: SearchSettings| {
+        let mut sim = chains_with(0.04, 1.5, 0.005, true, 8, s);
+        sim.run(Stop::Time(2.0), &mut NoSampler, &mut |_| {})
+            .unwrap();
+        (sim.counters(), sim.positions())
+    };
+    let (ca, pa) = run(search(0.01, 0.02));
+    let (cb, pb) = run(search(0.01, f64::INFINITY));
+    let grid = SearchSettings {
+        method: SearchMethod::Grid { threshold: 0.05 },
+        ..search(0.01, 0.02)
+    };
+    let (cg, pg) = run(grid);
+    assert!(ca.virtual_ > 5 * cb.virtual_.max(1), "{ca:?} {cb:?}");
+    assert!(ca.pair_events() > 300, "{ca:?}");
+    for (c, p) in [(cb, &pb), (cg, &pg)] {
+        assert_eq!(
+            (ca.core, ca.step_in, ca.step_out, ca.step_reflect),
+            (c.core, c.step_in, c.step_out, c.step_reflect)
+        );
+        let worst = pa
+            .iter()
+            .zip(p)
+            .map(|(x, y)| (*x - *y).length())
+            .fold(0.0, f64::max);
+        assert!(worst < 1e-7, "positions differ by {worst}");
+    }
 }
