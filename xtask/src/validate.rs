@@ -96,6 +96,14 @@ pub(crate) const CHECKS: &[Check] = &[
         quick: &["--quick"],
     },
     Check {
+        name: "flexible",
+        title: "Semi-flexible molecules: RATTLE between events, error against run time for the RATTLE step, rigid limit, conservation",
+        package: "dmd-sim",
+        example: "validate_flexible",
+        full: &[],
+        quick: &["--quick"],
+    },
+    Check {
         name: "hmc",
         title: "Hybrid Monte Carlo: exact canonical answers with deliberate misses, acceptance against segment length, stiff systems, checkpoints, chains",
         package: "dmd-sim",

@@ -66,6 +66,10 @@ pub enum CollideError {
     /// An input that must be a finite number is NaN or infinite.
     #[error("{0} is not finite")]
     NotFinite(&'static str),
+    /// A model that integrates the free motion numerically could not continue it to the event
+    /// (a semi-flexible molecule whose RATTLE step is too long for its motion).
+    #[error("the free motion could not be integrated to the event: {0}")]
+    FreeMotion(&'static str),
     /// The potential-energy change is NaN or −∞.
     #[error(
         "potential-energy change must be finite or +infinity (a hard core), got {0}; \

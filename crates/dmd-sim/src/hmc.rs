@@ -676,6 +676,10 @@ impl<M: PairModel> PairModel for Faulty<M> {
         self.inner.execute(i, j, si, sj, now, boundary, dr, vi, vj)
     }
 
+    fn take_kinetic_error(&mut self) -> f64 {
+        self.inner.take_kinetic_error()
+    }
+
     fn pair_energy(&self, i: u32, j: u32, si: u32, sj: u32) -> f64 {
         self.inner.pair_energy(i, j, si, sj)
     }

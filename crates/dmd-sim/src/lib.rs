@@ -53,6 +53,8 @@ pub mod cell;
 pub mod chains;
 pub mod checkpoint;
 pub mod event;
+// Issue 10, second half: semi-flexible molecules (RATTLE between events).
+pub mod flexible;
 pub mod hmc;
 pub mod init;
 pub mod model;

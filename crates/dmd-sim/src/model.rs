@@ -272,6 +272,16 @@ pub trait PairModel {
         None
     }
 
+    /// Kinetic energy changed by the model's own numerical integration of the free motion
+    /// since the last call, beyond what the executed events' `delta_u` accounts for (taken:
+    /// reported once). The loop adds it to its tracked kinetic energy after every event. Exact
+    /// free motion changes nothing (0); semi-flexible molecules, whose internal motion is
+    /// integrated by RATTLE, report the step's energy error as it enters at their events.
+    #[inline(always)]
+    fn take_kinetic_error(&mut self) -> f64 {
+        0.0
+    }
+
     /// Counters of the model's own work (root searches), if it has any.
     fn search_stats(&self) -> Option<crate::terraced::SearchStats> {
         None

@@ -715,6 +715,11 @@ where
         } else if ex.delta_u != 0.0 {
             self.energy_changes(-ex.delta_u, ex.delta_u, -ex.delta_u);
         }
+        let numerical = self.model.take_kinetic_error();
+        if numerical != 0.0 {
+            // The free motion's integration error (RATTLE) that the event brought in.
+            self.energy_changes(numerical, 0.0, 0.0);
+        }
         self.phase.virial.add(ex.virial);
         self.bodies[iu].generation = self.bodies[iu].generation.wrapping_add(1);
         self.bodies[ju].generation = self.bodies[ju].generation.wrapping_add(1);

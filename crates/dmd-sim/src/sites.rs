@@ -536,7 +536,7 @@ impl Rotation {
 
 /// What one site pair's search has come to.
 #[derive(Clone, Copy, Debug, PartialEq)]
-enum SiteSearch {
+pub(crate) enum SiteSearch {
     /// Nothing can happen in its bracket.
     Done,
     /// Its event.
@@ -1126,7 +1126,7 @@ impl Sites {
     }
 }
 
-fn check_settings(s: &SearchSettings) -> Result<(), SitesError> {
+pub(crate) fn check_settings(s: &SearchSettings) -> Result<(), SitesError> {
     Adaptive::new(s.max_step).map_err(SitesError::Search)?;
     if let SearchMethod::Grid { threshold } = s.method {
         Grid::new(s.max_step, threshold).map_err(SitesError::Search)?;
@@ -1153,19 +1153,19 @@ fn check_settings(s: &SearchSettings) -> Result<(), SitesError> {
 
 /// The band of a site pair's level in squared distance.
 #[derive(Clone, Copy, Debug, PartialEq)]
-struct Band {
+pub(crate) struct Band {
     /// `r_in²` (`−1`: none).
-    lo: f64,
+    pub(crate) lo: f64,
     /// `r_out²` (`+∞`: none).
-    hi: f64,
+    pub(crate) hi: f64,
     /// `1 / (hi − lo)` when both exist, else 0.
     inv: f64,
     /// A squared length for tolerances.
-    scale: f64,
+    pub(crate) scale: f64,
 }
 
 impl Band {
-    fn of(l: &Level) -> Band {
+    pub(crate) fn of(l: &Level) -> Band {
         let both = l.inner2 > 0.0 && l.outer2 < f64::INFINITY;
         Band {
             lo: l.inner2,
@@ -1185,7 +1185,7 @@ impl Band {
 
     /// `g` and `ġ` (module documentation) from `d²` and its rate.
     #[inline(always)]
-    fn indicator(&self, d2: f64, rate: f64) -> (f64, f64) {
+    pub(crate) fn indicator(&self, d2: f64, rate: f64) -> (f64, f64) {
         if self.inv > 0.0 {
             (
                 (d2 - self.lo) * (self.hi - d2) * self.inv,
@@ -1253,7 +1253,7 @@ impl SiteGeometry {
 /// already inside), or `None` if the pair never comes within `R` from now on; each root in the
 /// form without cancellation.
 #[inline]
-fn bracket(dr: DVec3, dv: DVec3, radius2: f64) -> Option<(f64, f64)> {
+pub(crate) fn bracket(dr: DVec3, dv: DVec3, radius2: f64) -> Option<(f64, f64)> {
     let r2 = dr.length_squared();
     let b = dr.dot(dv);
     let c = r2 - radius2;
