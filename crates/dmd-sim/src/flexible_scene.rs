@@ -76,7 +76,7 @@ pub(crate) fn types_of(
                 format!("species[{k}].bonds"),
                 "missing: a scene with semi-flexible molecules (species with `bonds`) runs them \
                  all with RATTLE, and rigid site molecules cannot share the run; give this \
-                 species `bonds` too (bonding every pair of sites makes it rigid)",
+                 species `bonds` too (3n − 6 independent bonds hold n sites rigid)",
             ));
         };
         if s.molecule.is_some() {
