@@ -1540,6 +1540,14 @@ impl PairModel for Flexible {
         Some(self.stats)
     }
 
+    fn bond_error_at(&self, now: f64) -> Option<f64> {
+        Some(self.bond_error(now))
+    }
+
+    fn rattle_stats(&self) -> Option<FlexStats> {
+        Some(self.flex_stats())
+    }
+
     fn take_kinetic_error(&mut self) -> f64 {
         std::mem::take(&mut self.kinetic_error)
     }

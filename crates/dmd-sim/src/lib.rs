@@ -55,6 +55,7 @@ pub mod checkpoint;
 pub mod event;
 // Issue 10, second half: semi-flexible molecules (RATTLE between events).
 pub mod flexible;
+pub mod flexible_scene;
 pub mod hmc;
 pub mod init;
 pub mod model;

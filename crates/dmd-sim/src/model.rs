@@ -282,6 +282,17 @@ pub trait PairModel {
         0.0
     }
 
+    /// Largest relative bond-length error of semi-flexible molecules at `now` (models with
+    /// distance constraints only).
+    fn bond_error_at(&self, _now: f64) -> Option<f64> {
+        None
+    }
+
+    /// What the RATTLE integration did (semi-flexible molecules only).
+    fn rattle_stats(&self) -> Option<crate::flexible::FlexStats> {
+        None
+    }
+
     /// Counters of the model's own work (root searches), if it has any.
     fn search_stats(&self) -> Option<crate::terraced::SearchStats> {
         None

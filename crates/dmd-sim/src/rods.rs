@@ -37,6 +37,8 @@ pub enum Plan {
     GayBerne(Vec<PairTable<GayBerne>>),
     /// Rigid site molecules with stepped site–site potentials (issue 10).
     Sites(crate::site_scene::SitesPlan),
+    /// Semi-flexible molecules (species with `bonds`): RATTLE between events.
+    Flexible(crate::flexible_scene::FlexiblePlan),
 }
 
 impl Plan {
@@ -50,6 +52,11 @@ impl Plan {
         let names: Vec<&str> = scene.species.iter().map(|s| s.name.as_str()).collect();
         let index = |n: &str| names.iter().position(|&m| m == n).expect("checked");
         let kt = scene.init.temperature;
+        if scene.has_bonds() {
+            return Ok(Plan::Flexible(crate::flexible_scene::FlexiblePlan::of(
+                scene,
+            )?));
+        }
         if scene.has_sites() {
             return Ok(Plan::Sites(crate::site_scene::SitesPlan::of(scene)?));
         }
@@ -136,6 +143,7 @@ impl Plan {
             Plan::Rods(t) => t.iter().map(|(_, p)| p.reach()).fold(0.0, f64::max),
             Plan::GayBerne(t) => t.iter().map(|(_, p)| p.reach()).fold(0.0, f64::max),
             Plan::Sites(p) => p.reach(),
+            Plan::Flexible(p) => p.reach(),
         }
     }
 
@@ -147,6 +155,7 @@ impl Plan {
             Plan::Rods(_) => "terraced-rods",
             Plan::GayBerne(_) => "terraced-gay-berne",
             Plan::Sites(_) => "rigid-sites",
+            Plan::Flexible(_) => "semi-flexible",
         }
     }
 }

@@ -214,6 +214,13 @@ pub struct Summary {
     /// Hybrid Monte Carlo statistics (issue 9; only with `[hmc]`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub hmc: Option<HmcSummary>,
+    /// Largest relative bond-length error of the semi-flexible molecules at the end (at their
+    /// last event and interpolated to the end time; only with `bonds`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bond_error: Option<f64>,
+    /// What the RATTLE integration did (only with `bonds`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rattle: Option<crate::flexible::FlexStats>,
 }
 
 /// Runs a scene. `base` is the folder relative paths of the scene are read from; with
@@ -399,6 +406,18 @@ pub fn run_scene_with(
                 .into());
             }
             let model = crate::site_scene::model(scene, &config, plan)?;
+            ctx.go_any_queue(model, reporter)
+        }
+        Plan::Flexible(plan) => {
+            if options.checkpoint_every.is_some() {
+                return Err(SceneError::invalid(
+                    "checkpoint",
+                    "checkpoints are not available for semi-flexible molecules (their internal \
+                     states and site-pair levels are not saved): run without --checkpoint-every",
+                )
+                .into());
+            }
+            let model = crate::flexible_scene::model(scene, &config, plan)?;
             ctx.go_any_queue(model, reporter)
         }
     }
@@ -830,6 +849,8 @@ impl Context<'_> {
                 .chain
                 .as_ref()
                 .map(|c| hmc_out(c.summary(n as usize), &u)),
+            bond_error: sim.model().bond_error_at(sim.now()),
+            rattle: sim.model().rattle_stats(),
         };
         if let Some(dir) = out {
             summary.files = write_observables(dir, &mut observers, o.plots, &self.units)?;

@@ -122,6 +122,8 @@ pub struct Scene {
     pub site_pair: Vec<SitePairSpec>,
     /// How events of rigid site molecules are executed (issue 10).
     pub impulse: Option<ImpulseSpec>,
+    /// The RATTLE integration of semi-flexible molecules (species with `bonds`).
+    pub rattle: Option<RattleSpec>,
 }
 
 /// The unit system of a scene's numbers.
@@ -267,6 +269,29 @@ pub struct SpeciesSpec {
     pub sites: Option<Vec<SiteSpec>>,
     /// Or: a shipped rigid site molecule (issue 10).
     pub molecule: Option<MoleculeSpec>,
+    /// Distance constraints `[a, b]` between sites (0-based indices into `sites`), lengths as
+    /// given by the positions: the species is a semi-flexible molecule.
+    pub bonds: Option<Vec<[i64; 2]>>,
+}
+
+/// `[rattle]`: the RATTLE integration of the internal motion of semi-flexible molecules.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RattleSpec {
+    /// The step `h` (default from the thermal atom speed and the shortest bond,
+    /// [`crate::flexible_scene::STEP_BOND_FRACTION`]).
+    pub step: Option<f64>,
+    /// Relative tolerance of the SHAKE and velocity iterations (default 1e-12).
+    #[serde(default = "rattle_tolerance")]
+    pub tolerance: f64,
+    /// Reset each molecule's internal kinetic energy at events to its conserved value (default
+    /// true).
+    #[serde(default = "yes")]
+    pub rescale: bool,
+}
+
+fn rattle_tolerance() -> f64 {
+    1e-12
 }
 
 // ----- Rigid site molecules (issue 10) -----------------------------------------------------------
@@ -1011,6 +1036,7 @@ impl Scene {
             crate::site_scene::check(self)?;
         } else {
             crate::site_scene::refuse_site_keys(self)?;
+            crate::flexible_scene::refuse_keys(self)?;
             self.check_pair_tables()?;
         }
         // Initial state.

@@ -257,8 +257,17 @@ pub(crate) fn check(scene: &Scene) -> Result<(), SceneError> {
         }
     }
     let (kinds, atoms) = atoms_of(scene)?;
+    let flexible = scene.has_bonds();
     let mut types = Vec::new();
-    for (k, a) in atoms.iter().enumerate() {
+    if flexible {
+        crate::flexible_scene::types_of(scene, &atoms)?;
+    } else if scene.rattle.is_some() {
+        return Err(SceneError::invalid(
+            "rattle",
+            "only used by semi-flexible molecules: give the species `bonds`",
+        ));
+    }
+    for (k, a) in atoms.iter().enumerate().filter(|_| !flexible) {
         let t = MoleculeType::new(a).map_err(|e| {
             SceneError::invalid(
                 format!("species[{k}].sites"),
@@ -317,6 +326,9 @@ pub(crate) fn check(scene: &Scene) -> Result<(), SceneError> {
                 ));
             }
         }
+    }
+    if flexible {
+        return crate::flexible_scene::check_rest(scene);
     }
     // Impulse rule.
     if scene
@@ -416,7 +428,7 @@ pub(crate) fn check(scene: &Scene) -> Result<(), SceneError> {
 }
 
 /// The `[search]` keys of site molecules.
-fn check_search(scene: &Scene) -> Result<(), SceneError> {
+pub(crate) fn check_search(scene: &Scene) -> Result<(), SceneError> {
     let Some(sr) = &scene.search else {
         return Ok(());
     };
@@ -495,7 +507,7 @@ impl SitesPlan {
     /// # Errors
     /// [`SceneError::Invalid`] if the model refuses them (never for a checked scene).
     pub fn of(scene: &Scene) -> Result<Self, SceneError> {
-        let (kinds, atoms) = atoms_of(scene)?;
+        let (kinds, potentials, atoms) = kinds_and_tables(scene)?;
         let types = atoms
             .iter()
             .enumerate()
@@ -504,18 +516,6 @@ impl SitesPlan {
                     .map_err(|e| SceneError::invalid(format!("species[{k}].sites"), e.to_string()))
             })
             .collect::<Result<Vec<_>, _>>()?;
-        let index = |n: &str| kinds.iter().position(|m| m == n).expect("checked") as u32;
-        let tables: Vec<_> = scene
-            .site_pair
-            .iter()
-            .map(|p| {
-                (
-                    (index(&p.sites[0]) as usize, index(&p.sites[1]) as usize),
-                    p.steps.clone(),
-                )
-            })
-            .collect();
-        let potentials = Potentials::from_tables(kinds.len(), &tables);
         // A model without bodies tells the reach of the molecule pairs.
         let probe = Sites::new(
             types.clone(),
@@ -542,20 +542,9 @@ impl SitesPlan {
         self.reach
     }
 
-    /// The shortest length of the site–site tables: the innermost radius or the narrowest
-    /// band between two radii.
+    /// The shortest length of the site–site tables.
     fn shortest_length(&self) -> f64 {
-        let mut l = f64::INFINITY;
-        for p in self.potentials.all() {
-            let r = p.radii();
-            for (k, &x) in r.iter().enumerate() {
-                l = l.min(x);
-                if k > 0 {
-                    l = l.min((x - r[k - 1]).abs());
-                }
-            }
-        }
-        l
+        shortest_length(&self.potentials)
     }
 
     /// The fastest thermal speed of a site at `kt`: `√(kT/M) + ρ max_k √(kT/I_k)` over the
@@ -575,6 +564,42 @@ impl SitesPlan {
             })
             .fold(0.0, f64::max)
     }
+}
+
+/// Site kinds, site–site potentials and the atoms of every species.
+pub(crate) type KindsAndTables = (Vec<String>, Potentials, Vec<Vec<SiteAtom>>);
+
+/// The site kinds, the site–site potentials over them and the atoms of every species of a
+/// checked scene of site molecules (rigid or semi-flexible).
+///
+/// # Errors
+/// A species that is not a molecule (never for a checked scene).
+pub(crate) fn kinds_and_tables(scene: &Scene) -> Result<KindsAndTables, SceneError> {
+    let (kinds, atoms) = atoms_of(scene)?;
+    let index = |n: &str| kinds.iter().position(|m| m == n).expect("checked");
+    let tables: Vec<_> = scene
+        .site_pair
+        .iter()
+        .map(|p| ((index(&p.sites[0]), index(&p.sites[1])), p.steps.clone()))
+        .collect();
+    let potentials = Potentials::from_tables(kinds.len(), &tables);
+    Ok((kinds, potentials, atoms))
+}
+
+/// The shortest length of site–site tables: the innermost radius or the narrowest band
+/// between two radii.
+pub(crate) fn shortest_length(potentials: &Potentials) -> f64 {
+    let mut l = f64::INFINITY;
+    for p in potentials.all() {
+        let r = p.radii();
+        for (k, &x) in r.iter().enumerate() {
+            l = l.min(x);
+            if k > 0 {
+                l = l.min((x - r[k - 1]).abs());
+            }
+        }
+    }
+    l
 }
 
 /// The search settings of a scene of site molecules: `[search]` with its defaults. The default
