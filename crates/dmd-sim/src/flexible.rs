@@ -76,8 +76,6 @@
 
 pub mod rattle;
 
-use std::collections::HashMap;
-
 use collide::{Bond, CollideError, ConstraintSolver, Molecule, Outcome};
 use glam::{DQuat, DVec3};
 use rand::{RngExt, SeedableRng};
@@ -87,6 +85,7 @@ use root_search::{Adaptive, Crossing, Grid, Method, SearchError};
 
 use crate::event::{Boundary, Kind};
 use crate::model::{Executed, PairClass, PairModel, PairSetupError};
+use crate::pair_state::{SavedSearches, SiteLevels};
 use crate::potential::Potentials;
 use crate::sites::{Band, SITE_OVERLAP_TOLERANCE, SiteAtom, SiteSearch, bracket, check_settings};
 use crate::terraced::{SearchMethod, SearchSettings, SearchStats};
@@ -479,8 +478,8 @@ pub struct Flexible {
     type_pairs: Vec<TypePair>,
     body_type: Vec<u32>,
     trajectories: Vec<Trajectory>,
-    levels: HashMap<(u32, u32), Box<[u16]>>,
-    pending: Vec<Vec<(u32, f64, Pending)>>,
+    levels: SiteLevels,
+    pending: SavedSearches<Pending>,
     settings: SearchSettings,
     rattle: RattleSettings,
     solver: ConstraintSolver,
@@ -628,8 +627,8 @@ impl Flexible {
             type_pairs,
             body_type: body_type.to_vec(),
             trajectories,
-            levels: HashMap::new(),
-            pending: vec![Vec::new(); n],
+            levels: SiteLevels::default(),
+            pending: SavedSearches::new(n),
             settings,
             rattle,
             solver: ConstraintSolver::new(),
@@ -694,8 +693,7 @@ impl Flexible {
 
     /// The stored level of site `a` of `i` with site `b` of `j`.
     pub fn site_level(&self, i: u32, j: u32, a: usize, b: usize) -> u16 {
-        let (key, idx) = self.index(i, j, a, b);
-        self.levels.get(&key).map_or(0, |l| l[idx])
+        self.levels.get(i, j, a, b, self.sizes(i, j))
     }
 
     #[inline]
@@ -703,59 +701,21 @@ impl Flexible {
         self.types[self.body_type[i as usize] as usize].masses.len()
     }
 
+    /// The site counts of `i` and `j`.
     #[inline]
-    fn index(&self, i: u32, j: u32, a: usize, b: usize) -> ((u32, u32), usize) {
-        if i < j {
-            ((i, j), a * self.n_sites(j) + b)
-        } else {
-            ((j, i), b * self.n_sites(i) + a)
-        }
+    fn sizes(&self, i: u32, j: u32) -> (usize, usize) {
+        (self.n_sites(i), self.n_sites(j))
     }
 
     fn store_level(&mut self, i: u32, j: u32, a: usize, b: usize, level: u16) {
-        let (key, idx) = self.index(i, j, a, b);
-        let size = self.n_sites(i) * self.n_sites(j);
-        let entry = self
-            .levels
-            .entry(key)
-            .or_insert_with(|| vec![0; size].into_boxed_slice());
-        entry[idx] = level;
-        if level == 0 && entry.iter().all(|&l| l == 0) {
-            self.levels.remove(&key);
-        }
+        let sizes = self.sizes(i, j);
+        self.levels.set(i, j, a, b, sizes, level);
     }
 
-    /// All site-pair levels of `(i, j)` in the order of the type pair's table.
+    /// All site-pair levels of `(i, j)` in the order of the type pair's table (`α`-major for
+    /// `i`).
     fn pair_levels(&self, i: u32, j: u32) -> Vec<u16> {
-        let (ni, nj) = (self.n_sites(i), self.n_sites(j));
-        let mut out = vec![0; ni * nj];
-        if let Some(l) = self.levels.get(&(i.min(j), i.max(j))) {
-            for a in 0..ni {
-                for b in 0..nj {
-                    out[a * nj + b] = if i < j { l[a * nj + b] } else { l[b * ni + a] };
-                }
-            }
-        }
-        out
-    }
-
-    /// Saves what the event of `(i, j)` at `at` will continue (identified by its time, as in
-    /// `sites`: a pair may hold two current events).
-    fn set_pending(&mut self, i: u32, j: u32, at: f64, what: Pending) {
-        let list = &mut self.pending[i as usize];
-        match list.iter_mut().find(|(p, _, _)| *p == j) {
-            Some(e) => {
-                e.1 = at;
-                e.2 = what;
-            }
-            None => list.push((j, at, what)),
-        }
-    }
-
-    fn take_pending(&mut self, i: u32, j: u32, now: f64) -> Option<Pending> {
-        let list = &mut self.pending[i as usize];
-        let k = list.iter().position(|(p, at, _)| *p == j && *at == now)?;
-        Some(list.swap_remove(k).2)
+        self.levels.pair(i, j, self.sizes(i, j))
     }
 
     #[inline]
@@ -866,7 +826,7 @@ impl Flexible {
         if self.trajectories[i as usize].failure().is_some()
             || self.trajectories[j as usize].failure().is_some()
         {
-            self.set_pending(i, j, now, Pending::Broken);
+            self.pending.set(i, j, now, Pending::Broken);
             return Some((0.0, Kind::Pair(Boundary::Inner)));
         }
         let mut root = (f64::INFINITY, 0usize, Boundary::Inner);
@@ -881,12 +841,13 @@ impl Flexible {
         }
         if root.0 <= wait && root.0 < f64::INFINITY {
             let dt = root.0 - now;
-            self.set_pending(i, j, now + dt, Pending::Fire(root.1 as u32, root.2));
+            self.pending
+                .set(i, j, now + dt, Pending::Fire(root.1 as u32, root.2));
             return Some((dt, Kind::Pair(root.2)));
         }
         if wait < f64::INFINITY {
             let dt = (wait - now).max(0.0);
-            self.set_pending(i, j, now + dt, Pending::Sites(sites));
+            self.pending.set(i, j, now + dt, Pending::Sites(sites));
             return Some((dt, Kind::Virtual));
         }
         None
@@ -1226,7 +1187,7 @@ impl PairModel for Flexible {
         }
         if start > 0.0 {
             self.stats.deferred += 1;
-            self.set_pending(i, j, now + start, Pending::Later);
+            self.pending.set(i, j, now + start, Pending::Later);
             return Some((start, Kind::Virtual));
         }
         self.start_sites(i, j, now, dr, dv)
@@ -1242,7 +1203,7 @@ impl PairModel for Flexible {
         dr: DVec3,
         dv: DVec3,
     ) -> Option<(f64, Kind)> {
-        match self.take_pending(i, j, now)? {
+        match self.pending.take(i, j, now)? {
             Pending::Later => self.start_sites(i, j, now, dr, dv),
             Pending::Sites(sites) => self.advance(i, j, now, dr, dv, sites, false),
             Pending::Fire(..) | Pending::Broken => None,
@@ -1267,7 +1228,7 @@ impl PairModel for Flexible {
             virial: 0.0,
             overlap,
         };
-        let (k, boundary) = match self.take_pending(i, j, now) {
+        let (k, boundary) = match self.pending.take(i, j, now) {
             Some(Pending::Fire(k, boundary)) => (k, boundary),
             Some(Pending::Broken) => return Err(BROKEN),
             _ => return Ok(skipped(false)),
@@ -1420,7 +1381,7 @@ impl PairModel for Flexible {
     }
 
     fn pair_energy(&self, i: u32, j: u32, _si: u32, _sj: u32) -> f64 {
-        let Some(l) = self.levels.get(&(i.min(j), i.max(j))) else {
+        let Some(l) = self.levels.stored(i, j) else {
             return 0.0;
         };
         let tp = self.type_pair(i.min(j), i.max(j));
@@ -1484,7 +1445,7 @@ impl PairModel for Flexible {
 
     #[inline]
     fn forget(&mut self, i: u32) {
-        self.pending[i as usize].clear();
+        self.pending.clear(i);
     }
 
     fn rebase(&mut self, t0: f64) {

@@ -1,4 +1,6 @@
-//! Stored pair state: which level (terrace, well) each interacting pair is on.
+//! Stored pair state: which level (terrace, well) each interacting pair is on
+//! ([`PairStates`]; per site pair of molecules: [`SiteLevels`]), and what the pending virtual
+//! event of a pair will continue ([`SavedSearches`]).
 //!
 //! Only pairs off level 0 (inside at least one step radius) are stored, in per-body lists with
 //! a fixed stride: body `i`'s partners are `partners[i·cap .. i·cap + len[i]]`. A look-up scans
@@ -9,6 +11,8 @@
 //!
 //! The level is changed only by executed events; it is never recomputed from a distance during
 //! a run (at a boundary the distance is the radius up to round-off, either side).
+
+use std::collections::HashMap;
 
 /// Levels of all interacting pairs.
 #[derive(Clone, Debug)]
@@ -128,9 +132,142 @@ impl PairStates {
     }
 }
 
+/// Site-pair levels of molecule pairs (site molecules, rigid or semi-flexible): for each
+/// molecule pair `(lo, hi)`, `lo < hi`, with a site pair off level 0, the levels of all its
+/// site pairs, `α`-major for `lo` (`sizes` below are the two molecules' site counts).
+#[derive(Clone, Debug, Default)]
+pub struct SiteLevels {
+    map: HashMap<(u32, u32), Box<[u16]>>,
+}
+
+impl SiteLevels {
+    /// Key and index of site pair (`a` of `i`, `b` of `j`); `sizes` = site counts of `i`, `j`.
+    #[inline]
+    fn index(i: u32, j: u32, a: usize, b: usize, sizes: (usize, usize)) -> ((u32, u32), usize) {
+        if i < j {
+            ((i, j), a * sizes.1 + b)
+        } else {
+            ((j, i), b * sizes.0 + a)
+        }
+    }
+
+    /// The level of site `a` of `i` with site `b` of `j`.
+    pub fn get(&self, i: u32, j: u32, a: usize, b: usize, sizes: (usize, usize)) -> u16 {
+        let (key, idx) = Self::index(i, j, a, b, sizes);
+        self.map.get(&key).map_or(0, |l| l[idx])
+    }
+
+    /// Sets the level of site `a` of `i` with site `b` of `j`; a molecule pair whose site
+    /// pairs are all back on level 0 is dropped.
+    pub fn set(&mut self, i: u32, j: u32, a: usize, b: usize, sizes: (usize, usize), level: u16) {
+        let (key, idx) = Self::index(i, j, a, b, sizes);
+        let entry = self
+            .map
+            .entry(key)
+            .or_insert_with(|| vec![0; sizes.0 * sizes.1].into_boxed_slice());
+        entry[idx] = level;
+        if level == 0 && entry.iter().all(|&l| l == 0) {
+            self.map.remove(&key);
+        }
+    }
+
+    /// All site-pair levels of `(i, j)`, `α`-major for `i` (zeros if none is stored).
+    pub fn pair(&self, i: u32, j: u32, sizes: (usize, usize)) -> Vec<u16> {
+        let (ni, nj) = sizes;
+        let mut out = vec![0; ni * nj];
+        if let Some(l) = self.stored(i, j) {
+            for a in 0..ni {
+                for b in 0..nj {
+                    out[a * nj + b] = if i < j { l[a * nj + b] } else { l[b * ni + a] };
+                }
+            }
+        }
+        out
+    }
+
+    /// The stored levels of `(i, j)` in the order of the lower index (`None`: all on 0).
+    pub fn stored(&self, i: u32, j: u32) -> Option<&[u16]> {
+        self.map.get(&(i.min(j), i.max(j))).map(|l| &l[..])
+    }
+
+    /// Number of molecule pairs stored.
+    pub fn len(&self) -> usize {
+        self.map.len()
+    }
+
+    /// No molecule pair stored.
+    pub fn is_empty(&self) -> bool {
+        self.map.is_empty()
+    }
+}
+
+/// What the pending virtual events of every owner will continue (a saved root search, a pair
+/// to start searching …), per partner, tagged with the event's time as the loop computes it
+/// (`now + dt`). The loop may hold two current events of one pair: a pair that left the
+/// neighbour list and came back with neither body changing is predicted again while its first
+/// event is still scheduled. The time tells them apart, so the stale one, when due, finds
+/// nothing instead of consuming the live one's saved state.
+#[derive(Clone, Debug)]
+pub struct SavedSearches<P> {
+    lists: Vec<Vec<(u32, f64, P)>>,
+}
+
+impl<P> SavedSearches<P> {
+    /// Nothing saved, for `n` owners.
+    pub fn new(n: usize) -> Self {
+        SavedSearches {
+            lists: (0..n).map(|_| Vec::new()).collect(),
+        }
+    }
+
+    /// Saves `what` for the event of owner `i` with partner `j` at time `at` (replacing what
+    /// an earlier prediction of the pair saved).
+    pub fn set(&mut self, i: u32, j: u32, at: f64, what: P) {
+        let list = &mut self.lists[i as usize];
+        match list.iter_mut().find(|(p, _, _)| *p == j) {
+            Some(e) => {
+                e.1 = at;
+                e.2 = what;
+            }
+            None => list.push((j, at, what)),
+        }
+    }
+
+    /// Takes what the event of `i` with `j` due at `now` continues (`None` for a stale event).
+    pub fn take(&mut self, i: u32, j: u32, now: f64) -> Option<P> {
+        let list = &mut self.lists[i as usize];
+        let k = list.iter().position(|(p, at, _)| *p == j && *at == now)?;
+        Some(list.swap_remove(k).2)
+    }
+
+    /// Forgets everything owner `i` saved (its events are invalid: it changed).
+    pub fn clear(&mut self, i: u32) {
+        self.lists[i as usize].clear();
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A site pair reads the same from either molecule, a pair's table is oriented from the
+    /// asking molecule, and a molecule pair back on level 0 everywhere is dropped.
+    #[test]
+    fn site_levels_read_the_same_from_either_molecule() {
+        let mut l = SiteLevels::default();
+        // Molecule 5 has 3 sites, molecule 2 has 2.
+        l.set(5, 2, 1, 0, (3, 2), 4);
+        l.set(2, 5, 1, 2, (2, 3), 7);
+        assert_eq!(l.get(2, 5, 0, 1, (2, 3)), 4);
+        assert_eq!(l.get(5, 2, 2, 1, (3, 2)), 7);
+        assert_eq!(l.pair(5, 2, (3, 2)), vec![0, 0, 4, 0, 0, 7]);
+        assert_eq!(l.pair(2, 5, (2, 3)), vec![0, 4, 0, 0, 0, 7]);
+        assert_eq!(l.len(), 1);
+        l.set(5, 2, 1, 0, (3, 2), 0);
+        assert_eq!(l.len(), 1);
+        l.set(5, 2, 2, 1, (3, 2), 0);
+        assert!(l.is_empty() && l.stored(2, 5).is_none());
+    }
 
     #[test]
     fn set_get_remove_symmetric_and_growing() {

@@ -61,8 +61,6 @@
 //! [`SearchSettings::verify_step`] searches every interval again on a fine grid and counts the
 //! roots the search missed.
 
-use std::collections::HashMap;
-
 use collide::{
     Body as CollideBody, Bond, CollideError, ConstraintSolver, Contact, LinearBody, Molecule,
     Outcome, RigidBody, Velocity, contact,
@@ -76,6 +74,7 @@ use root_search::{Adaptive, Crossing, Grid, Method, SearchError, SearchState};
 
 use crate::event::{Boundary, Kind};
 use crate::model::{Executed, PairClass, PairModel, PairSetupError};
+use crate::pair_state::{SavedSearches, SiteLevels};
 use crate::potential::{Level, Potentials};
 use crate::terraced::{SearchMethod, SearchSettings, SearchStats};
 
@@ -586,8 +585,8 @@ pub struct Sites {
     rotations: Vec<Rotation>,
     /// Site-pair levels of molecule pairs `(i, j)`, `i < j`, in `j`-major order of `(α, β)`:
     /// index `α n_j + β`. Absent: all on level 0.
-    levels: HashMap<(u32, u32), Box<[u16]>>,
-    pending: Vec<Vec<(u32, f64, Pending)>>,
+    levels: SiteLevels,
+    pending: SavedSearches<Pending>,
     settings: SearchSettings,
     rule: ImpulseRule,
     cross: Option<CrossCheck>,
@@ -684,8 +683,8 @@ impl Sites {
             type_pairs,
             body_type: body_type.to_vec(),
             rotations,
-            levels: HashMap::new(),
-            pending: vec![Vec::new(); n],
+            levels: SiteLevels::default(),
+            pending: SavedSearches::new(n),
             settings,
             rule,
             cross: None,
@@ -752,8 +751,7 @@ impl Sites {
 
     /// The stored level of site `a` of `i` with site `b` of `j`.
     pub fn site_level(&self, i: u32, j: u32, a: usize, b: usize) -> u16 {
-        let (key, idx) = self.index(i, j, a, b);
-        self.levels.get(&key).map_or(0, |l| l[idx])
+        self.levels.get(i, j, a, b, self.sizes(i, j))
     }
 
     /// Number of molecule pairs with a site pair off level 0.
@@ -766,63 +764,21 @@ impl Sites {
         self.types[self.body_type[i as usize] as usize].sites.len()
     }
 
-    /// Key and index of site pair `(a of i, b of j)`.
+    /// The site counts of `i` and `j`.
     #[inline]
-    fn index(&self, i: u32, j: u32, a: usize, b: usize) -> ((u32, u32), usize) {
-        if i < j {
-            ((i, j), a * self.n_sites(j) + b)
-        } else {
-            ((j, i), b * self.n_sites(i) + a)
-        }
+    fn sizes(&self, i: u32, j: u32) -> (usize, usize) {
+        (self.n_sites(i), self.n_sites(j))
     }
 
     fn set_level(&mut self, i: u32, j: u32, a: usize, b: usize, level: u16) {
-        let (key, idx) = self.index(i, j, a, b);
-        let size = self.n_sites(i) * self.n_sites(j);
-        let entry = self
-            .levels
-            .entry(key)
-            .or_insert_with(|| vec![0; size].into_boxed_slice());
-        entry[idx] = level;
-        if level == 0 && entry.iter().all(|&l| l == 0) {
-            self.levels.remove(&key);
-        }
+        let sizes = self.sizes(i, j);
+        self.levels.set(i, j, a, b, sizes, level);
     }
 
     /// All site-pair levels of `(i, j)` in the order of the type pair's table (`α`-major for
     /// `i`).
     fn pair_levels(&self, i: u32, j: u32) -> Vec<u16> {
-        let (ni, nj) = (self.n_sites(i), self.n_sites(j));
-        let mut out = vec![0; ni * nj];
-        if let Some(l) = self.levels.get(&(i.min(j), i.max(j))) {
-            for a in 0..ni {
-                for b in 0..nj {
-                    out[a * nj + b] = if i < j { l[a * nj + b] } else { l[b * ni + a] };
-                }
-            }
-        }
-        out
-    }
-
-    /// Saves what the event of `(i, j)` at `at` (as the loop computes it, `now + dt`) will
-    /// continue. The loop may hold two current events of one pair (a pair that left the
-    /// neighbour list and came back without either body changing is predicted again), so the
-    /// time identifies which one the saved state belongs to; the other is ignored when due.
-    fn set_pending(&mut self, i: u32, j: u32, at: f64, what: Pending) {
-        let list = &mut self.pending[i as usize];
-        match list.iter_mut().find(|(p, _, _)| *p == j) {
-            Some(e) => {
-                e.1 = at;
-                e.2 = what;
-            }
-            None => list.push((j, at, what)),
-        }
-    }
-
-    fn take_pending(&mut self, i: u32, j: u32, now: f64) -> Option<Pending> {
-        let list = &mut self.pending[i as usize];
-        let k = list.iter().position(|(p, at, _)| *p == j && *at == now)?;
-        Some(list.swap_remove(k).2)
+        self.levels.pair(i, j, self.sizes(i, j))
     }
 
     #[inline]
@@ -931,12 +887,13 @@ impl Sites {
         }
         if root.0 <= wait && root.0 < f64::INFINITY {
             let dt = root.0 - now;
-            self.set_pending(i, j, now + dt, Pending::Fire(root.1 as u32, root.2));
+            self.pending
+                .set(i, j, now + dt, Pending::Fire(root.1 as u32, root.2));
             return Some((dt, Kind::Pair(root.2)));
         }
         if wait < f64::INFINITY {
             let dt = (wait - now).max(0.0);
-            self.set_pending(i, j, now + dt, Pending::Sites(sites));
+            self.pending.set(i, j, now + dt, Pending::Sites(sites));
             return Some((dt, Kind::Virtual));
         }
         None
@@ -1350,7 +1307,7 @@ impl PairModel for Sites {
         if start > 0.0 {
             // Not yet within the bounding spheres' reach: set the site pairs up when there.
             self.stats.deferred += 1;
-            self.set_pending(i, j, now + start, Pending::Later);
+            self.pending.set(i, j, now + start, Pending::Later);
             return Some((start, Kind::Virtual));
         }
         self.start_sites(i, j, now, dr, dv)
@@ -1366,7 +1323,7 @@ impl PairModel for Sites {
         dr: DVec3,
         dv: DVec3,
     ) -> Option<(f64, Kind)> {
-        match self.take_pending(i, j, now)? {
+        match self.pending.take(i, j, now)? {
             Pending::Later => self.start_sites(i, j, now, dr, dv),
             Pending::Sites(sites) => self.advance(i, j, now, dr, dv, sites, false),
             Pending::Fire(..) => None,
@@ -1391,7 +1348,7 @@ impl PairModel for Sites {
             virial: 0.0,
             overlap,
         };
-        let Some(Pending::Fire(k, boundary)) = self.take_pending(i, j, now) else {
+        let Some(Pending::Fire(k, boundary)) = self.pending.take(i, j, now) else {
             return Ok(skipped(false));
         };
         let tp = self.type_pair(i, j);
@@ -1528,7 +1485,7 @@ impl PairModel for Sites {
         let (lo, hi) = (i.min(j), i.max(j));
         // `dr` is r_i − r_j: orient it from the lower index like the stored levels.
         let dr = if i == lo { dr } else { -dr };
-        let stored = self.levels.get(&(lo, hi));
+        let stored = self.levels.stored(lo, hi);
         let tp = self.type_pair(lo, hi);
         let (olo, _) = self.pose(lo, now);
         let (ohi, _) = self.pose(hi, now);
@@ -1558,7 +1515,7 @@ impl PairModel for Sites {
     }
 
     fn pair_energy(&self, i: u32, j: u32, _si: u32, _sj: u32) -> f64 {
-        let Some(l) = self.levels.get(&(i.min(j), i.max(j))) else {
+        let Some(l) = self.levels.stored(i, j) else {
             return 0.0;
         };
         let (lo, hi) = (i.min(j), i.max(j));
@@ -1625,7 +1582,7 @@ impl PairModel for Sites {
 
     #[inline]
     fn forget(&mut self, i: u32) {
-        self.pending[i as usize].clear();
+        self.pending.clear(i);
     }
 
     fn rebase(&mut self, t0: f64) {

@@ -51,7 +51,7 @@ use root_search::{Adaptive, Crossing, Grid, Method, SearchError, SearchState};
 
 use crate::event::{Boundary, Kind};
 use crate::model::{Executed, PairClass, PairModel, PairSetupError};
-use crate::pair_state::PairStates;
+use crate::pair_state::{PairStates, SavedSearches};
 
 /// How the event times of a pair are searched.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -397,7 +397,7 @@ pub struct Terraced<P> {
     body_species: Vec<u32>,
     rods: Vec<Rod>,
     states: PairStates,
-    pending: Vec<Vec<(u32, f64, Pending)>>,
+    pending: SavedSearches<Pending>,
     settings: SearchSettings,
     adaptive: Adaptive,
     verify: Option<Grid>,
@@ -519,7 +519,7 @@ impl<P: PairPotential> Terraced<P> {
             body_species: body_species.to_vec(),
             rods,
             states: PairStates::new(n),
-            pending: vec![Vec::new(); n],
+            pending: SavedSearches::new(n),
             settings,
             adaptive,
             verify,
@@ -560,28 +560,6 @@ impl<P: PairPotential> Terraced<P> {
             self.rods[j as usize].axis(now),
         );
         self.pair(si, sj).potential.energy(&g)
-    }
-
-    /// Saves what the virtual event of `(i, j)` at `at` (as the loop computes it, `now + dt`)
-    /// will continue. The loop may hold two current events of one pair: a pair that left the
-    /// neighbour list and came back without either body changing is predicted again while its
-    /// first event is still scheduled. The time tells them apart, so the stale one, when due,
-    /// finds nothing instead of consuming the saved search of the live one.
-    fn set_pending(&mut self, i: u32, j: u32, at: f64, what: Pending) {
-        let list = &mut self.pending[i as usize];
-        match list.iter_mut().find(|(p, _, _)| *p == j) {
-            Some(e) => {
-                e.1 = at;
-                e.2 = what;
-            }
-            None => list.push((j, at, what)),
-        }
-    }
-
-    fn take_pending(&mut self, i: u32, j: u32, now: f64) -> Option<Pending> {
-        let list = &mut self.pending[i as usize];
-        let k = list.iter().position(|(p, at, _)| *p == j && *at == now)?;
-        Some(list.swap_remove(k).2)
     }
 
     /// Runs (or continues) the search of pair `(i, j)` on terrace `k` from `from`.
@@ -748,7 +726,7 @@ impl<P: PairPotential> Terraced<P> {
                 // The last sample is the state's (the search never samples past it).
                 let udot = if last.0 == s.time() { last.1 } else { f64::NAN };
                 let dt = s.time() - now;
-                self.set_pending(i, j, now + dt, Pending::Resume(s, udot));
+                self.pending.set(i, j, now + dt, Pending::Resume(s, udot));
                 Some((dt, Kind::Virtual))
             }
             root_search::Outcome::NoRoot => None,
@@ -823,7 +801,8 @@ impl<P: PairPotential> PairModel for Terraced<P> {
             // Not yet within reach: start searching when the pair gets there.
             self.stats.deferred += 1;
             let dt = start - now;
-            self.set_pending(i, j, now + dt, Pending::Start { at: start, end });
+            self.pending
+                .set(i, j, now + dt, Pending::Start { at: start, end });
             return Some((dt, Kind::Virtual));
         }
         self.search(
@@ -849,7 +828,7 @@ impl<P: PairPotential> PairModel for Terraced<P> {
         dr: DVec3,
         dv: DVec3,
     ) -> Option<(f64, Kind)> {
-        let from = self.take_pending(i, j, now)?;
+        let from = self.pending.take(i, j, now)?;
         let pt = self.pair(si, sj);
         let k = pt.terrace(self.states.get(i, j));
         self.search(i, j, si, sj, k, now, dr, dv, from)
@@ -995,7 +974,7 @@ impl<P: PairPotential> PairModel for Terraced<P> {
 
     #[inline]
     fn forget(&mut self, i: u32) {
-        self.pending[i as usize].clear();
+        self.pending.clear(i);
     }
 
     fn rebase(&mut self, t0: f64) {
