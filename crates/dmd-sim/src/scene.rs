@@ -1489,42 +1489,7 @@ impl Scene {
                      analytic)",
                 ));
             }
-            if let Some(x) = sr.max_step {
-                positive("search.max_step", x)?;
-            }
-            if let Some(x) = sr.window
-                && (x.is_nan() || x <= 0.0)
-            {
-                return Err(SceneError::invalid(
-                    "search.window",
-                    format!("must be a positive time or inf, got {x}"),
-                ));
-            }
-            if let Some(j) = sr.jitter
-                && !(0.0..0.5).contains(&j)
-            {
-                return Err(SceneError::invalid(
-                    "search.jitter",
-                    format!("must be at least 0 and below 0.5, got {j}"),
-                ));
-            }
-            if let Some(x) = sr.grid_threshold {
-                if sr.method != SearchMethodSpec::Grid {
-                    return Err(SceneError::invalid(
-                        "search.grid_threshold",
-                        "only used with `method = \"grid\"`",
-                    ));
-                }
-                if x.is_nan() || x < 0.0 {
-                    return Err(SceneError::invalid(
-                        "search.grid_threshold",
-                        format!("must be an energy ≥ 0 or inf, got {x}"),
-                    ));
-                }
-            }
-            if let Some(x) = sr.verify_step {
-                positive("search.verify_step", x)?;
-            }
+            check_search_keys(sr, "an energy ≥ 0 or inf")?;
             if let Some(x) = sr.max_change {
                 if x.is_nan() || x <= 0.0 {
                     return Err(SceneError::invalid(
@@ -1697,6 +1662,49 @@ fn check_terraces(k: usize, p: &PotentialSpec, t: &TerraceSpec) -> Result<(), Sc
             "needs a radial profile of the potential: available for `rods` and \
              `lennard-jones`, not `gay-berne`",
         ));
+    }
+    Ok(())
+}
+
+/// The `[search]` keys that rods and site molecules share: step, window, jitter, the grid's
+/// grazing threshold (`threshold` says what it must be: its unit differs with the indicator)
+/// and the verification step.
+pub(crate) fn check_search_keys(sr: &SearchSpec, threshold: &str) -> Result<(), SceneError> {
+    if let Some(x) = sr.max_step {
+        positive("search.max_step", x)?;
+    }
+    if let Some(x) = sr.window
+        && (x.is_nan() || x <= 0.0)
+    {
+        return Err(SceneError::invalid(
+            "search.window",
+            format!("must be a positive time or inf, got {x}"),
+        ));
+    }
+    if let Some(j) = sr.jitter
+        && !(0.0..0.5).contains(&j)
+    {
+        return Err(SceneError::invalid(
+            "search.jitter",
+            format!("must be at least 0 and below 0.5, got {j}"),
+        ));
+    }
+    if let Some(x) = sr.grid_threshold {
+        if sr.method != SearchMethodSpec::Grid {
+            return Err(SceneError::invalid(
+                "search.grid_threshold",
+                "only used with `method = \"grid\"`",
+            ));
+        }
+        if x.is_nan() || x < 0.0 {
+            return Err(SceneError::invalid(
+                "search.grid_threshold",
+                format!("must be {threshold}, got {x}"),
+            ));
+        }
+    }
+    if let Some(x) = sr.verify_step {
+        positive("search.verify_step", x)?;
     }
     Ok(())
 }

@@ -432,52 +432,18 @@ pub(crate) fn check_search(scene: &Scene) -> Result<(), SceneError> {
     let Some(sr) = &scene.search else {
         return Ok(());
     };
-    if let Some(x) = sr.max_step {
-        crate::scene::positive("search.max_step", x)?;
-    }
-    if let Some(x) = sr.window
-        && (x.is_nan() || x <= 0.0)
+    crate::scene::check_search_keys(sr, "a squared length ≥ 0 or inf (site molecules)")?;
+    if let Some(x) = sr.verify_step
+        && let Some(step) = sr.max_step
+        && x >= step
     {
         return Err(SceneError::invalid(
-            "search.window",
-            format!("must be a positive time or inf, got {x}"),
+            "search.verify_step",
+            format!(
+                "{x} is not finer than search.max_step = {step}: the verification grid \
+                 would find nothing the search cannot"
+            ),
         ));
-    }
-    if let Some(j) = sr.jitter
-        && !(0.0..0.5).contains(&j)
-    {
-        return Err(SceneError::invalid(
-            "search.jitter",
-            format!("must be at least 0 and below 0.5, got {j}"),
-        ));
-    }
-    if let Some(x) = sr.grid_threshold {
-        if sr.method != SearchMethodSpec::Grid {
-            return Err(SceneError::invalid(
-                "search.grid_threshold",
-                "only used with `method = \"grid\"`",
-            ));
-        }
-        if x.is_nan() || x < 0.0 {
-            return Err(SceneError::invalid(
-                "search.grid_threshold",
-                format!("must be a squared length ≥ 0 or inf (site molecules), got {x}"),
-            ));
-        }
-    }
-    if let Some(x) = sr.verify_step {
-        crate::scene::positive("search.verify_step", x)?;
-        if let Some(step) = sr.max_step
-            && x >= step
-        {
-            return Err(SceneError::invalid(
-                "search.verify_step",
-                format!(
-                    "{x} is not finer than search.max_step = {step}: the verification grid \
-                     would find nothing the search cannot"
-                ),
-            ));
-        }
     }
     if sr.max_change.is_some() {
         return Err(SceneError::invalid(
