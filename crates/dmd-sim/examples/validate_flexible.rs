@@ -43,6 +43,7 @@ fn search(verify: Option<f64>) -> SearchSettings {
         jitter: 0.0,
         verify_step: verify,
         max_change: f64::INFINITY,
+        horizon: 0.0,
     }
 }
 

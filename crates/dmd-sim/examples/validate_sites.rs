@@ -39,6 +39,7 @@ fn search(method: SearchMethod, step: f64, verify: Option<f64>) -> SearchSetting
         jitter: 0.01,
         verify_step: verify,
         max_change: f64::INFINITY,
+        horizon: 0.0,
     }
 }
 

@@ -289,6 +289,7 @@ pub fn search_settings(scene: &Scene, plan: &FlexiblePlan) -> SearchSettings {
         jitter: spec.jitter.unwrap_or(0.01),
         verify_step: spec.verify_step,
         max_change: f64::INFINITY,
+        horizon: 0.0,
     }
 }
 

@@ -252,6 +252,10 @@ fn terrace_map<P: PairPotential, F: Fn(f64) -> f64>(
     TerraceMap::from_profile(profile_needed()?, placement, &layout, rule(step), &opts).map_err(err)
 }
 
+/// Default of `search.horizon` in windows: how far certified prediction may jump ahead in
+/// one call (measured on the paper's rods, docs/PERFORMANCE.md).
+pub const DEFAULT_HORIZON_WINDOWS: f64 = 2.0;
+
 /// Default of `search.max_change`: steps limited to where `U` is predicted to cross at most
 /// this fraction of the terrace's width (see `docs/VALIDATION.md` for the misses and the cost
 /// against it).
@@ -292,6 +296,9 @@ pub fn search_settings(scene: &Scene) -> SearchSettings {
         jitter: spec.jitter.unwrap_or(0.01),
         verify_step: spec.verify_step,
         max_change: spec.max_change.unwrap_or(DEFAULT_MAX_CHANGE),
+        horizon: spec
+            .horizon
+            .unwrap_or(DEFAULT_HORIZON_WINDOWS * spec.window.unwrap_or(max_step)),
     }
 }
 

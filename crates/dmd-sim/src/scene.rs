@@ -553,6 +553,10 @@ pub struct SearchSpec {
     /// Adaptive only: limit each step so that `U` is predicted to change by at most this
     /// fraction of the terrace's width (`inf`: no limit).
     pub max_change: Option<f64>,
+    /// Certified prediction: how far ahead one search call may jump the stretch that a Taylor
+    /// model of the potential's effective coordinate proves free of crossings (a time; 0: off).
+    /// Default: [`crate::rods::DEFAULT_HORIZON_WINDOWS`] windows for potentials with a model.
+    pub horizon: Option<f64>,
 }
 
 /// Where the initial positions come from.
@@ -1503,6 +1507,9 @@ impl Scene {
                         "only used with `method = \"adaptive\"`",
                     ));
                 }
+            }
+            if let Some(x) = sr.horizon {
+                non_negative("search.horizon", x)?;
             }
         }
         if let Some(c) = &self.output.orientation_acf {

@@ -445,6 +445,13 @@ pub(crate) fn check_search(scene: &Scene) -> Result<(), SceneError> {
             ),
         ));
     }
+    if sr.horizon.is_some() {
+        return Err(SceneError::invalid(
+            "search.horizon",
+            "only used by rods on terraced potentials: the searches of site molecules have no \
+             certified prediction",
+        ));
+    }
     if sr.max_change.is_some() {
         return Err(SceneError::invalid(
             "search.max_change",
@@ -590,6 +597,7 @@ pub fn search_settings(scene: &Scene, plan: &SitesPlan) -> SearchSettings {
         jitter: spec.jitter.unwrap_or(0.01),
         verify_step: spec.verify_step,
         max_change: f64::INFINITY,
+        horizon: 0.0,
     }
 }
 

@@ -43,7 +43,7 @@
 
 use collide::{LinearBody, Outcome, PairForce, Velocity, terrace};
 use glam::DVec3;
-use potential::{PairGeometry, PairPotential, PotentialError, TerraceMap};
+use potential::{FreeFlight, PairGeometry, PairPotential, PotentialError, TerraceMap};
 use rand_distr::{Distribution, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;
 use rigid_free::LinearRotor;
@@ -89,6 +89,12 @@ pub struct SearchSettings {
     /// sampled. (The indicator's own slope cannot size the step: it vanishes mid-terrace.)
     /// `+∞`: off, the paper's search.
     pub max_change: f64,
+    /// Certified prediction (`potential::certify`): before each search call, jump the
+    /// stretch of free flight in which a Taylor model of the potential's effective coordinate
+    /// proves that `U` stays inside its band, up to this far ahead; a pair still safe there
+    /// gets a virtual event at that time, having evaluated nothing. 0: off (and for potentials
+    /// without a Taylor model, whatever its value).
+    pub horizon: f64,
 }
 
 impl SearchSettings {
@@ -102,6 +108,7 @@ impl SearchSettings {
             jitter: 0.01,
             verify_step: None,
             max_change: f64::INFINITY,
+            horizon: 0.0,
         }
     }
 }
@@ -130,6 +137,12 @@ pub struct SearchStats {
     pub verified: u64,
     /// Searches in whose interval the fine grid found an earlier root (missed events).
     pub verify_misses: u64,
+    /// Taylor models of certified prediction evaluated (each proves a stretch or stops).
+    #[serde(default)]
+    pub taylor_models: u64,
+    /// Search calls that jumped a proven-safe stretch.
+    #[serde(default)]
+    pub certified_jumps: u64,
 }
 
 impl SearchStats {
@@ -146,6 +159,8 @@ impl SearchStats {
             failures: self.failures - earlier.failures,
             verified: self.verified - earlier.verified,
             verify_misses: self.verify_misses - earlier.verify_misses,
+            taylor_models: self.taylor_models - earlier.taylor_models,
+            certified_jumps: self.certified_jumps - earlier.certified_jumps,
         }
     }
 }
@@ -181,6 +196,9 @@ struct Band {
     up: f64,
     /// `ΔV` of crossing down (NaN for terrace 0).
     down: f64,
+    /// The band in the potential's effective coordinate, for certified prediction (at most two
+    /// intervals, the flanks of a well; unused slots are empty and never hold a pair).
+    coordinate: [(f64, f64); 2],
 }
 
 impl Band {
@@ -320,6 +338,14 @@ impl<P: PairPotential> PairTerraces<P> {
                     } else {
                         energies[k - 1] - energies[k]
                     },
+                    coordinate: {
+                        let mut c = [(f64::NAN, f64::NAN); 2];
+                        for (slot, part) in c.iter_mut().zip(potential.coordinate_intervals(lo, hi))
+                        {
+                            *slot = part;
+                        }
+                        c
+                    },
                 }
             })
             .collect();
@@ -372,6 +398,48 @@ enum Pending {
     Start { at: f64, end: f64 },
     /// Continue a suspended search; the speed `U̇` at its last sample.
     Resume(SearchState, f64),
+}
+
+/// Certified prediction from `t` towards `limit`: Taylor models of the potential's effective
+/// coordinate along `flight`, each proving a stretch in which `U` stays inside `band`
+/// (`potential::certify`). Stops at `limit`, when a model proves less than `min_jump` (a
+/// crossing may be near: the root search takes over), or after 32 models. Returns the time
+/// reached and the models evaluated (0 for a potential without a model).
+#[inline]
+fn certified_jump<P: PairPotential>(
+    pot: &P,
+    band: &Band,
+    flight: impl Fn(f64) -> FreeFlight,
+    mut t: f64,
+    limit: f64,
+    min_jump: f64,
+) -> (f64, u64) {
+    let mut models = 0;
+    let mut ends: Option<(f64, f64)> = None;
+    while t < limit && models < 32 {
+        let h = limit - t;
+        let Some(m) = pot.taylor_model(&flight(t), h) else {
+            break;
+        };
+        models += 1;
+        // The interval that holds the pair (none: off its band, so prove nothing).
+        let Some((a, b)) =
+            ends.or_else(|| potential::certify::interval_containing(&band.coordinate, m.x))
+        else {
+            break;
+        };
+        ends = Some((a, b));
+        let tau = m.safe_time(a, b, h);
+        if tau >= h {
+            t = limit;
+            break;
+        }
+        if tau < min_jump {
+            break;
+        }
+        t += tau;
+    }
+    (t, models)
 }
 
 /// Mass and moment of inertia (about any axis through the centre perpendicular to the rod's
@@ -498,6 +566,13 @@ impl<P: PairPotential> Terraced<P> {
                 why: "> 0 (inf: off)",
             }));
         }
+        if settings.horizon.is_nan() || settings.horizon < 0.0 {
+            return Err(ModelError::Search(SearchError::BadSetting {
+                name: "horizon",
+                value: settings.horizon,
+                why: ">= 0 (0: off)",
+            }));
+        }
         if !(0.0..0.5).contains(&settings.jitter) {
             return Err(ModelError::Search(SearchError::BadSetting {
                 name: "jitter",
@@ -590,6 +665,70 @@ impl<P: PairPotential> Terraced<P> {
                 _ => (clamp, 0.0),
             }
         };
+        // Certified prediction: jump the stretch the Taylor model proves free of crossings
+        // (module documentation); a pair still safe at the horizon gets a virtual event there.
+        let mut from = from;
+        if self.settings.horizon > 0.0 {
+            let (t_start, end) = match from {
+                Pending::Start { at, end } => (at.max(now), end),
+                Pending::Resume(s, _) => (s.time(), s.end()),
+            };
+            let limit = (t_start + self.settings.horizon).min(end);
+            let spin = ri.rotor.rate() + rj.rotor.rate();
+            let flight = |t: f64| FreeFlight {
+                r: dr + dv * (t - now),
+                v: dv,
+                s_i: ri.axis(t),
+                w_i: wi,
+                s_j: rj.axis(t),
+                w_j: wj,
+                spin,
+            };
+            let (t, models) = certified_jump(
+                pot,
+                &band,
+                flight,
+                t_start,
+                limit,
+                0.05 * self.settings.max_step,
+            );
+            self.stats.taylor_models += models;
+            if t > t_start {
+                self.stats.certified_jumps += 1;
+                if let Some(grid) = self.verify {
+                    // The jumped stretch, searched on the fine grid like any search interval.
+                    self.stats.verified += 1;
+                    let mut reference = |t: f64| -> (f64, f64) {
+                        let (u, du) = pair_at(t);
+                        band.indicator(u, du)
+                    };
+                    let found =
+                        grid.start(&mut reference, t_start, t, Crossing::Falling, f64::INFINITY);
+                    if let Ok(rep) = found
+                        && rep
+                            .root()
+                            .is_some_and(|tg| tg < t - 1e-6 * self.settings.max_step)
+                    {
+                        self.stats.verify_misses += 1;
+                        if std::env::var_os("DMD_DEBUG_MISSES").is_some() {
+                            eprintln!(
+                                "missed by a certified jump: pair ({i}, {j}) terrace {k} {band:?} \
+                                 from {t_start} to {t}, fine grid root at {:?}",
+                                rep.root()
+                            );
+                        }
+                    }
+                }
+                if t >= end {
+                    return None;
+                }
+                if t >= limit {
+                    self.pending.set(i, j, t, Pending::Start { at: t, end });
+                    return Some((t - now, Kind::Virtual));
+                }
+                from = Pending::Start { at: t, end };
+            }
+        }
         let (t0, end, speed) = match from {
             Pending::Start { at, end } => (at.max(now), end, f64::NAN),
             Pending::Resume(s, udot) => (s.time(), s.end(), udot.abs()),
@@ -1172,7 +1311,7 @@ impl<P: PairPotential> PairModel for Terraced<P> {
 const ROD_NUMBERS: usize = 11;
 
 /// Numbers of the search counters in [`PairModel::extra_state`] (two per counter).
-const STATS_NUMBERS: usize = 20;
+const STATS_NUMBERS: usize = 24;
 
 fn stats_counts(s: &SearchStats) -> [u64; STATS_NUMBERS / 2] {
     [
@@ -1186,6 +1325,8 @@ fn stats_counts(s: &SearchStats) -> [u64; STATS_NUMBERS / 2] {
         s.failures,
         s.verified,
         s.verify_misses,
+        s.taylor_models,
+        s.certified_jumps,
     ]
 }
 
@@ -1201,6 +1342,8 @@ fn stats_from_counts(c: [u64; STATS_NUMBERS / 2]) -> SearchStats {
         failures: c[7],
         verified: c[8],
         verify_misses: c[9],
+        taylor_models: c[10],
+        certified_jumps: c[11],
     }
 }
 

@@ -42,6 +42,7 @@ fn search(step: f64, window: f64) -> SearchSettings {
         jitter: 0.0,
         verify_step: None,
         max_change: f64::INFINITY,
+        horizon: 0.0,
     }
 }
 

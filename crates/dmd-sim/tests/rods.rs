@@ -400,6 +400,66 @@ fn verification_catches_the_misses_of_a_coarse_grid() {
     assert_eq!(misses[1], 0, "adaptive: {misses:?}");
 }
 
+/// Certified prediction (`search.horizon`): the jumped stretches are searched again on the fine
+/// grid and hold no event, stiff starts included (fast spin, dense); jumps really happen and
+/// replace most evaluations; and the run follows the uncertified one event for event (the
+/// same crossings and reflections, positions equal to round-off amplified by the dynamics).
+#[test]
+fn certified_prediction_misses_nothing_and_changes_no_event() {
+    let rod = LjRod::new(1.0, 1.0, 0.33).unwrap();
+    let (l, r) = lattice(5, 0.5);
+    let n = r.len();
+    let v = dmd_sim::init::maxwell_boltzmann(&vec![1.0; n], 1.4, 6);
+    let axes: Vec<DVec3> = (0..n)
+        .map(|i| DVec3::new((i as f64).sin(), (2.3 * i as f64).cos(), 0.2).normalize())
+        .collect();
+    // Spins from slow to fast (up to ~40 radians per time unit).
+    let omegas: Vec<DVec3> = (0..n)
+        .map(|i| DVec3::new((i as f64).cos(), -1.0, 0.5) * (1.0 + (i % 5) as f64 * 8.0))
+        .collect();
+    let run = |horizon: f64, stop: Stop| {
+        let search = SearchSettings {
+            verify_step: Some(0.0005),
+            horizon,
+            ..SearchSettings::paper(0.005)
+        };
+        let map = TerraceMap::evenly_spaced(&rod, 0.7, &TerraceOptions::default()).unwrap();
+        let model = rods_model(rod, map, &axes, &omegas, search);
+        let mut sim: Simulation<_, Queue> =
+            Simulation::new(DVec3::splat(l), &r, &v, &vec![0; n], model, settings(0.2)).unwrap();
+        let e0 = sim.kinetic_energy() + sim.potential_energy();
+        sim.run(stop, &mut NoSampler, &mut |_| {}).unwrap();
+        let e1 = sim.kinetic_energy() + sim.potential_energy();
+        assert!((e1 - e0).abs() < 1e-12 * e0.abs(), "{e0} -> {e1}");
+        assert_eq!(sim.anomalies().total(), 0);
+        let st = sim.model().search_stats().unwrap();
+        (st, sim.counters(), sim.positions())
+    };
+    let (plain, _, _) = run(0.0, Stop::Time(3.0));
+    let (cert, _, _) = run(0.02, Stop::Time(3.0));
+    assert_eq!(plain.taylor_models, 0);
+    assert_eq!(cert.verify_misses, 0, "{cert:?}");
+    assert_eq!(cert.off_terrace + cert.misfits, 0, "{cert:?}");
+    assert!(cert.certified_jumps > 10_000, "{cert:?}");
+    assert!(
+        cert.evaluations < plain.evaluations / 2,
+        "evaluations: {} certified, {} plain",
+        cert.evaluations,
+        plain.evaluations
+    );
+    // The same pair events over a stretch short enough for round-off not to grow.
+    let (_, c_a, x_a) = run(0.0, Stop::Time(0.3));
+    let (_, c_b, x_b) = run(0.02, Stop::Time(0.3));
+    assert_eq!(c_a.pair_events(), c_b.pair_events());
+    assert_eq!((c_a.step_in, c_a.step_out), (c_b.step_in, c_b.step_out));
+    let worst = x_a
+        .iter()
+        .zip(&x_b)
+        .map(|(a, b)| (*a - *b).length())
+        .fold(0.0, f64::max);
+    assert!(worst < 1e-6, "positions differ by {worst}");
+}
+
 /// The HMC hooks of the rods (issue 9): the canonical refresh draws `ω ⊥ axis` at the right
 /// temperature, a reversal retraces the axes exactly, the extra state round-trips bit for bit
 /// and refuses a foreign one, and the configured terrace agrees with the energy.

@@ -72,6 +72,7 @@ fn search(method: SearchMethod, step: f64, window: f64) -> SearchSettings {
         jitter: 0.0,
         verify_step: None,
         max_change: f64::INFINITY,
+        horizon: 0.0,
     }
 }
 

@@ -2,6 +2,7 @@
 
 use glam::DVec3;
 
+use crate::certify::{FreeFlight, TaylorModel};
 use crate::error::positive;
 use crate::pair::overlap;
 use crate::{PairEval, PairGeometry, PairPotential, PotentialError};
@@ -100,6 +101,43 @@ pub(crate) fn lj_reach(epsilon: f64, sigma: f64, level: f64) -> Result<f64, Pote
     Ok(sigma * x.powf(-1.0 / 6.0))
 }
 
+/// The open intervals of `x` on which `lo < 4ε[(σ/x)¹² − (σ/x)⁶] < hi`: the band of a terrace
+/// in the coordinate of certified prediction ([`crate::certify`]). The function falls on
+/// `(0, x_m)` and rises on `(x_m, ∞)` towards 0, `x_m = 2^{1/6}σ`, so the band is one interval
+/// around `x_m` when `lo` is below the minimum `−ε`, else up to two (one on each flank), whose
+/// ends are the levels' inner (`x < x_m`) and outer preimages, the roots of [`lj_reach`].
+pub(crate) fn lj_intervals(epsilon: f64, sigma: f64, lo: f64, hi: f64) -> Vec<(f64, f64)> {
+    if !(hi > -epsilon) || lo.is_nan() || !(lo < hi) {
+        return Vec::new();
+    }
+    let ratio = |u: f64| (u / epsilon).max(-1.0);
+    let x_plus = |u: f64| 0.5 * (1.0 + (1.0 + ratio(u)).sqrt());
+    // Inner preimage of a level above −ε; outer preimage of a level in (−ε, 0).
+    let inner = |u: f64| -> f64 {
+        if u == f64::INFINITY {
+            0.0
+        } else {
+            sigma * x_plus(u).powf(-1.0 / 6.0)
+        }
+    };
+    let outer = |u: f64| -> f64 {
+        if u >= 0.0 {
+            f64::INFINITY
+        } else {
+            sigma * ((-0.25 * ratio(u)) / x_plus(u)).powf(-1.0 / 6.0)
+        }
+    };
+    if !(lo > -epsilon) {
+        // The lowest terrace: the well's bottom lies inside the band.
+        vec![(inner(hi), outer(hi))]
+    } else if lo < 0.0 {
+        vec![(inner(hi), inner(lo)), (outer(lo), outer(hi))]
+    } else {
+        // A level at or above 0 has no outer preimage: the band lies on the inner flank.
+        vec![(inner(hi), inner(lo))]
+    }
+}
+
 impl PairPotential for LennardJones {
     #[inline]
     fn energy(&self, g: &PairGeometry) -> f64 {
@@ -142,6 +180,22 @@ impl PairPotential for LennardJones {
 
     fn reach(&self, u_k: f64) -> Result<f64, PotentialError> {
         lj_reach(self.epsilon, self.sigma, u_k)
+    }
+
+    /// `x = r`: `r⃛` bounded by the closest approach over the window.
+    #[inline]
+    fn taylor_model(&self, flight: &FreeFlight, h: f64) -> Option<TaylorModel> {
+        let (x, dx, ddx) = flight.distance_derivatives();
+        Some(TaylorModel {
+            x,
+            dx,
+            ddx,
+            third: flight.distance_third_bound(h),
+        })
+    }
+
+    fn coordinate_intervals(&self, lo: f64, hi: f64) -> Vec<(f64, f64)> {
+        lj_intervals(self.epsilon, self.sigma, lo, hi)
     }
 }
 

@@ -19,6 +19,9 @@
 //! - [`TerraceMap`]: the terraced potential of 003 Eq. 7 with a hard core, the paper's evenly
 //!   spaced levels or explicit ones, and the placement and step-energy rules of stepped
 //!   potentials on a radial [`Profile`] ([`Placement`], [`StepEnergy`]);
+//! - [`certify`]: certified event prediction, a Taylor model with a rigorous remainder of an
+//!   effective coordinate (`r`, or the rods' `r_e`) that proves stretches of free flight
+//!   without a level crossing;
 //! - [`reach`], [`virial`], [`quadrature`]: the reach of a level for any potential, second virial
 //!   coefficients of the smooth and terraced potentials, and the quadrature behind them.
 //!
@@ -47,6 +50,7 @@
 //! # Ok::<(), potential::PotentialError>(())
 //! ```
 
+pub mod certify;
 mod error;
 mod gay_berne;
 mod lennard_jones;
@@ -61,6 +65,7 @@ mod solve;
 mod terrace;
 pub mod virial;
 
+pub use certify::{FreeFlight, TaylorModel};
 pub use error::PotentialError;
 pub use gay_berne::GayBerne;
 pub use lennard_jones::LennardJones;

@@ -26,6 +26,7 @@
 use glam::DVec3;
 
 use crate::PotentialError;
+use crate::certify::{FreeFlight, TaylorModel};
 
 /// Where two bodies are relative to each other: the separation `r_ij = r_i − r_j` (lab frame;
 /// any minimum-image convention is the caller's) and the unit orientation vectors `s_i`, `s_j`
@@ -262,6 +263,26 @@ pub trait PairPotential {
     fn reach(&self, u_k: f64) -> Result<f64, PotentialError> {
         crate::reach::numerical(self, u_k)
     }
+
+    /// Certified event prediction (the [`certify`](crate::certify) module): a Taylor model of
+    /// an effective coordinate `x` of which `U` is a function alone, over the window `[0, h]` of
+    /// `flight`, with `third` bounding `|x⃛|` on the whole window. `None` (the default): the
+    /// potential offers no certificate and engines rely on their root searches alone.
+    fn taylor_model(&self, flight: &FreeFlight, h: f64) -> Option<TaylorModel> {
+        let _ = (flight, h);
+        None
+    }
+
+    /// The open intervals of the effective coordinate `x` of
+    /// [`taylor_model`](Self::taylor_model) on which `lo < U < hi` (`lo = −∞` for the lowest
+    /// terrace), disjoint and in increasing order: the band of a terrace in `x`. Engines
+    /// compute them once per terrace and find the one holding the pair with
+    /// [`certify::interval_containing`](crate::certify::interval_containing). The default, for
+    /// potentials without a model, is none.
+    fn coordinate_intervals(&self, lo: f64, hi: f64) -> Vec<(f64, f64)> {
+        let _ = (lo, hi);
+        Vec::new()
+    }
 }
 
 impl<P: PairPotential + ?Sized> PairPotential for &P {
@@ -285,6 +306,13 @@ impl<P: PairPotential + ?Sized> PairPotential for &P {
     fn reach(&self, u_k: f64) -> Result<f64, PotentialError> {
         (**self).reach(u_k)
     }
+    #[inline]
+    fn taylor_model(&self, flight: &FreeFlight, h: f64) -> Option<TaylorModel> {
+        (**self).taylor_model(flight, h)
+    }
+    fn coordinate_intervals(&self, lo: f64, hi: f64) -> Vec<(f64, f64)> {
+        (**self).coordinate_intervals(lo, hi)
+    }
 }
 
 impl<P: PairPotential + ?Sized> PairPotential for Box<P> {
@@ -307,6 +335,13 @@ impl<P: PairPotential + ?Sized> PairPotential for Box<P> {
     }
     fn reach(&self, u_k: f64) -> Result<f64, PotentialError> {
         (**self).reach(u_k)
+    }
+    #[inline]
+    fn taylor_model(&self, flight: &FreeFlight, h: f64) -> Option<TaylorModel> {
+        (**self).taylor_model(flight, h)
+    }
+    fn coordinate_intervals(&self, lo: f64, hi: f64) -> Vec<(f64, f64)> {
+        (**self).coordinate_intervals(lo, hi)
     }
 }
 

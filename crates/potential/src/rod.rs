@@ -1,7 +1,8 @@
 //! The modified Lennard-Jones rods of 003 §V (Eqs. 22–25).
 
+use crate::certify::{FreeFlight, TaylorModel};
 use crate::error::{non_negative, positive};
-use crate::lennard_jones::{energy_and_virial, energy_from_s2, lj_reach};
+use crate::lennard_jones::{energy_and_virial, energy_from_s2, lj_intervals, lj_reach};
 use crate::pair::overlap;
 use crate::{PairEval, PairGeometry, PairPotential, PotentialError};
 
@@ -185,6 +186,27 @@ impl PairPotential for LjRod {
 
     fn reach(&self, u_k: f64) -> Result<f64, PotentialError> {
         self.reach_closed_form(u_k)
+    }
+
+    /// `x = r_e = r + ζ(½ − c²)`, `c = s_i·s_j` (003 Eq. 23): `ẋ = ṙ − 2ζcċ`,
+    /// `ẍ = r̈ − 2ζ(ċ² + cc̈)`, and `x⃛ = r⃛ − 2ζ(cc⃛ + 3ċc̈)` with `|c⁽ⁿ⁾| ≤ Ωⁿ`, `|c| ≤ 1`:
+    /// `|x⃛| ≤ (2/√3)|v|³/r_lo² + 8ζΩ³` (`Ω` the flight's [`spin`](FreeFlight::spin)).
+    #[inline]
+    fn taylor_model(&self, flight: &FreeFlight, h: f64) -> Option<TaylorModel> {
+        let (r, rd, rdd) = flight.distance_derivatives();
+        let (c, cd, cdd) = flight.alignment_derivatives();
+        let w = flight.spin;
+        let z = self.zeta;
+        Some(TaylorModel {
+            x: self.effective_distance(r, c),
+            dx: rd - 2.0 * z * c * cd,
+            ddx: rdd - 2.0 * z * (cd * cd + c * cdd),
+            third: flight.distance_third_bound(h) + 8.0 * z * w * w * w,
+        })
+    }
+
+    fn coordinate_intervals(&self, lo: f64, hi: f64) -> Vec<(f64, f64)> {
+        lj_intervals(self.epsilon, self.sigma, lo, hi)
     }
 }
 

@@ -107,6 +107,12 @@ impl LinearRotor {
         self.omega
     }
 
+    /// The rotation rate `|ω|`.
+    #[inline]
+    pub fn rate(&self) -> f64 {
+        self.rate
+    }
+
     /// The unit axis at time `t`.
     #[inline]
     pub fn axis(&self, t: f64) -> DVec3 {
