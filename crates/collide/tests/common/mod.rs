@@ -1,6 +1,6 @@
 //! Random events with conserved quantities computed independently of the crate (from masses,
 //! principal moments and attitudes, never from the crate's inverse tensors). Shared by the
-//! property tests and by the validation example (`examples/validate.rs` includes this file).
+//! property tests and by the validation example (`examples/validate_collide.rs` includes this file).
 #![allow(dead_code, unreachable_pub)]
 
 use collide::{

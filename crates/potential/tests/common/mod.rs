@@ -1,6 +1,6 @@
 //! Random geometries and finite differences of `U`, computed from `energy` alone (never from
 //! the crate's derivatives). Shared by the integration tests and the validation example
-//! (`examples/validate.rs` includes this file).
+//! (`examples/validate_potential.rs` includes this file).
 #![allow(dead_code, unreachable_pub)]
 
 use glam::{DQuat, DVec3};

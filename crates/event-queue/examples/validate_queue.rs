@@ -11,7 +11,7 @@
 //! Exits non-zero if any order check fails. Speed targets are reported, not enforced: a shared
 //! machine's timings are not a pass/fail criterion.
 //!
-//! `cargo run --release -p dmd-event-queue --example validate -- [--events N] [--quick] [--figures DIR]`
+//! `cargo run --release -p dmd-event-queue --example validate_queue -- [--events N] [--quick] [--figures DIR]`
 
 use std::path::PathBuf;
 use std::process::ExitCode;
