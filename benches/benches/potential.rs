@@ -4,7 +4,9 @@
 //! - `energy/*`: `U` alone (what a root search's sign test or a terrace lookup needs);
 //! - `evaluate/*`: `U`, the force and both torques (what `U̇` and an impulse need);
 //! - `terrace/*`: the terrace lookup of a value (binary search over the paper's levels) and
-//!   the evaluation plus `U̇` (003 Eq. 12) that one root-search sample costs.
+//!   the evaluation plus `U̇` (003 Eq. 12) that one root-search sample costs;
+//! - `certify/*`: one step of certified prediction on the rods, a Taylor model of `r_e` with its
+//!   remainder bound and the safe time inside a band (`potential::certify`), beside the sample.
 //!
 //! Static dispatch on concrete types, as the engines call them. Each measurement cycles through
 //! 1024 pre-generated geometries in the interesting range of the potential (effective gap
@@ -15,7 +17,7 @@ use std::hint::black_box;
 use criterion::{Criterion, criterion_group, criterion_main};
 use glam::DVec3;
 use potential::{
-    GayBerne, LennardJones, LjRod, PairGeometry, PairPotential, Smoothed, TerraceMap,
+    FreeFlight, GayBerne, LennardJones, LjRod, PairGeometry, PairPotential, Smoothed, TerraceMap,
     TerraceOptions,
 };
 use rand::{RngExt, SeedableRng};
@@ -125,6 +127,43 @@ fn bench(c: &mut Criterion) {
                     rod.evaluate(black_box(&g_rod[k]))
                         .map(|e| (e.energy, e.rate(v, wi, wj))),
                 )
+            })
+        },
+    );
+    // One certified step: the Taylor model of r_e over a window of 0.02 and its safe time in
+    // the band of the pair's own terrace of the map above (the model's cost alone; the engine
+    // adds the two axes at the window's start).
+    let flights: Vec<FreeFlight> = g_rod
+        .iter()
+        .enumerate()
+        .map(|(i, g)| {
+            let w = 3.0 + (i % 7) as f64;
+            let wi = g.s_i.any_orthonormal_vector() * w;
+            let wj = g.s_j.any_orthonormal_vector() * -w;
+            FreeFlight::new(g.r_ij, v, g.s_i, wi, g.s_j, wj)
+        })
+        .collect();
+    let levels = map.levels();
+    let bands: Vec<(f64, f64)> = flights
+        .iter()
+        .zip(&us)
+        .map(|(f, &u)| {
+            let x = rod.taylor_model(f, 0.0).unwrap().x;
+            let t = map.terrace_of(u).unwrap_or(0);
+            let lo = if t == 0 { f64::NEG_INFINITY } else { levels[t - 1] };
+            let hi = levels.get(t).copied().unwrap_or(map.core());
+            let iv = rod.coordinate_intervals(lo, hi);
+            potential::certify::interval_containing(&iv, x).unwrap_or((x, x))
+        })
+        .collect();
+    c.bench_function(
+        "potential/certify/rods: Taylor model of r_e and safe time",
+        |b| {
+            b.iter(|| {
+                k = (k + 1) % N;
+                let m = rod.taylor_model(black_box(&flights[k]), 0.02).unwrap();
+                let (a, e) = bands[k];
+                black_box(m.safe_time(a, e, 0.02))
             })
         },
     );

@@ -73,12 +73,13 @@ impl FreeFlight {
     /// motion).
     #[inline]
     pub fn closest_approach_squared(&self, h: f64) -> f64 {
+        let b = self.r.dot(self.v);
         let v2 = self.v.length_squared();
-        let tau = if v2 > 0.0 {
-            (-self.r.dot(self.v) / v2).clamp(0.0, h)
-        } else {
-            0.0
-        };
+        // Receding (or at rest): the start is the closest point, no division.
+        if b >= 0.0 || v2 == 0.0 {
+            return self.r.length_squared();
+        }
+        let tau = (-b / v2).min(h);
         (self.r + self.v * tau).length_squared()
     }
 
@@ -101,8 +102,9 @@ impl FreeFlight {
     #[inline]
     pub fn distance_derivatives(&self) -> (f64, f64, f64) {
         let r = self.r.length();
-        let rd = self.r.dot(self.v) / r;
-        let rdd = ((self.v.length_squared() - rd * rd) / r).max(0.0);
+        let inv = 1.0 / r;
+        let rd = self.r.dot(self.v) * inv;
+        let rdd = ((self.v.length_squared() - rd * rd) * inv).max(0.0);
         (r, rd, rdd)
     }
 
