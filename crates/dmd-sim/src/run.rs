@@ -131,6 +131,9 @@ pub struct Summary {
     pub box_lengths: [f64; 3],
     /// Time-averaged kinetic temperature, `2⟨K⟩ / dof`.
     pub temperature: f64,
+    /// Kinetic temperature `2K/dof` at the start of production: the bath temperature exactly
+    /// when a thermostatted equilibration ended with `thermostat.rescale_at_end` (default).
+    pub temperature_start: f64,
     /// Degrees of freedom of the temperature (3N − 3 in NVE, 3N with a thermostat).
     pub degrees_of_freedom: f64,
     /// Pressure from the collision virial: `(N kT + Σ r_ij·Δp_i / 3t) / V`.
@@ -656,6 +659,13 @@ impl Context<'_> {
             if scene.hmc.is_some() {
                 sim.move_origin_here();
             }
+            // NVE production starts at the bath temperature, not wherever the stochastic
+            // thermostat left the kinetic energy (as the smd engine's last rescaling does).
+            if had_thermostat && scene.hmc.is_none() && scene.thermostat.rescales_at_end() {
+                if let Some(a) = andersen {
+                    sim.rescale_to_temperature(a.temperature);
+                }
+            }
             let (p0, _) = sim.momentum_and_mass();
             let k0 = sim.kinetic_energy();
             run.record.start = Some((
@@ -786,6 +796,7 @@ impl Context<'_> {
             density: n / volume,
             box_lengths: lengths.to_array(),
             temperature: u.temperature_out(kt),
+            temperature_start: u.temperature_out(2.0 * k0 / dof),
             degrees_of_freedom: dof,
             pressure: u.pressure_out(ideal + excess),
             pressure_ideal: u.pressure_out(ideal),

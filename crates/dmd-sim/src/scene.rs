@@ -633,6 +633,20 @@ pub struct ThermostatSpec {
     /// `equilibration` (default) or `always`.
     #[serde(default)]
     pub during: ThermostatPhase,
+    /// Scale all velocities (translational and rotational, one factor) when equilibration
+    /// ends, so that NVE production starts at the bath temperature exactly (default true;
+    /// only with `during = "equilibration"`).
+    pub rescale_at_end: Option<bool>,
+}
+
+impl ThermostatSpec {
+    /// Whether production starts with the velocities scaled to the bath temperature: an
+    /// Andersen thermostat that stops when equilibration ends, and `rescale_at_end` not off.
+    pub fn rescales_at_end(&self) -> bool {
+        self.kind == ThermostatKind::Andersen
+            && self.during == ThermostatPhase::Equilibration
+            && self.rescale_at_end.unwrap_or(true)
+    }
 }
 
 /// Which priority queue schedules the events.
@@ -1066,6 +1080,13 @@ impl Scene {
                         "`rate` and `temperature` are given but no thermostat is chosen (kind = \"andersen\")",
                     ));
                 }
+                if t.rescale_at_end.is_some() {
+                    return Err(SceneError::invalid(
+                        "thermostat.rescale_at_end",
+                        "there is no thermostat (kind = \"none\"): nothing ends equilibration at \
+                         a temperature to rescale to",
+                    ));
+                }
             }
             ThermostatKind::Andersen => {
                 let rate = t.rate.ok_or_else(|| {
@@ -1077,6 +1098,14 @@ impl Scene {
                 positive("thermostat.rate", rate)?;
                 if let Some(temp) = t.temperature {
                     positive("thermostat.temperature", temp)?;
+                }
+                if t.rescale_at_end == Some(true) && t.during == ThermostatPhase::Always {
+                    return Err(SceneError::invalid(
+                        "thermostat.rescale_at_end",
+                        "the thermostat acts in production too (during = \"always\"): there is \
+                         no end of equilibration to rescale at; remove the key or use during = \
+                         \"equilibration\"",
+                    ));
                 }
             }
         }
