@@ -53,7 +53,8 @@ impl Rdf {
         self.samples += 1;
         let r2max = self.r_max * self.r_max;
         let inv_w = 1.0 / self.width;
-        let add = |d: DVec3, counts: &mut [u64]| {
+        let counts = &mut self.counts;
+        for_each_pair(&pos, l, self.r_max, |_, _, d| {
             let r2 = d.length_squared();
             if r2 < r2max {
                 let k = (r2.sqrt() * inv_w) as usize;
@@ -61,53 +62,7 @@ impl Rdf {
                     *c += 1;
                 }
             }
-        };
-        // A grid of cells at least r_max wide when three fit along every axis, else all pairs.
-        let dims: [usize; 3] =
-            std::array::from_fn(|a| ((l[a] / self.r_max).floor() as usize).max(1));
-        if dims.iter().all(|&d| d >= 3) {
-            let idx = |p: DVec3| -> [usize; 3] {
-                std::array::from_fn(|a| {
-                    (((p[a] / l[a]) * dims[a] as f64) as usize).min(dims[a] - 1)
-                })
-            };
-            let n_cells = dims[0] * dims[1] * dims[2];
-            let lin = |c: [usize; 3]| c[0] + dims[0] * (c[1] + dims[1] * c[2]);
-            let mut head = vec![usize::MAX; n_cells];
-            let mut next = vec![usize::MAX; n];
-            for (i, &p) in pos.iter().enumerate() {
-                let c = lin(idx(p));
-                next[i] = head[c];
-                head[c] = i;
-            }
-            for (i, &p) in pos.iter().enumerate() {
-                let c = idx(p);
-                for dz in [dims[2] - 1, 0, 1] {
-                    for dy in [dims[1] - 1, 0, 1] {
-                        for dx in [dims[0] - 1, 0, 1] {
-                            let nc = [
-                                (c[0] + dx) % dims[0],
-                                (c[1] + dy) % dims[1],
-                                (c[2] + dz) % dims[2],
-                            ];
-                            let mut j = head[lin(nc)];
-                            while j != usize::MAX {
-                                if j > i {
-                                    add(min_image(p - pos[j], l), &mut self.counts);
-                                }
-                                j = next[j];
-                            }
-                        }
-                    }
-                }
-            }
-        } else {
-            for i in 0..n {
-                for j in i + 1..n {
-                    add(min_image(pos[i] - pos[j], l), &mut self.counts);
-                }
-            }
-        }
+        });
     }
 
     /// Rows `(r at bin centre, g(r))`.
@@ -130,7 +85,62 @@ impl Rdf {
     }
 }
 
-fn wrap(p: DVec3, l: DVec3) -> DVec3 {
+/// Calls `f(i, j, d)` for every pair `i < j` of `pos` (positions in the box `l`), with `d` the
+/// minimum-image `pos[i] − pos[j]`, at least for every pair closer than `r_max` (more may
+/// come; the caller filters by `|d|`). A grid of cells at least `r_max` wide when three fit
+/// along every axis, else all pairs: each pair is visited once either way, with the same `d`.
+pub(crate) fn for_each_pair(
+    pos: &[DVec3],
+    l: DVec3,
+    r_max: f64,
+    mut f: impl FnMut(usize, usize, DVec3),
+) {
+    let n = pos.len();
+    let dims: [usize; 3] = std::array::from_fn(|a| ((l[a] / r_max).floor() as usize).max(1));
+    if dims.iter().all(|&d| d >= 3) {
+        let idx = |p: DVec3| -> [usize; 3] {
+            std::array::from_fn(|a| (((p[a] / l[a]) * dims[a] as f64) as usize).min(dims[a] - 1))
+        };
+        let n_cells = dims[0] * dims[1] * dims[2];
+        let lin = |c: [usize; 3]| c[0] + dims[0] * (c[1] + dims[1] * c[2]);
+        let mut head = vec![usize::MAX; n_cells];
+        let mut next = vec![usize::MAX; n];
+        for (i, &p) in pos.iter().enumerate() {
+            let c = lin(idx(p));
+            next[i] = head[c];
+            head[c] = i;
+        }
+        for (i, &p) in pos.iter().enumerate() {
+            let c = idx(p);
+            for dz in [dims[2] - 1, 0, 1] {
+                for dy in [dims[1] - 1, 0, 1] {
+                    for dx in [dims[0] - 1, 0, 1] {
+                        let nc = [
+                            (c[0] + dx) % dims[0],
+                            (c[1] + dy) % dims[1],
+                            (c[2] + dz) % dims[2],
+                        ];
+                        let mut j = head[lin(nc)];
+                        while j != usize::MAX {
+                            if j > i {
+                                f(i, j, min_image(p - pos[j], l));
+                            }
+                            j = next[j];
+                        }
+                    }
+                }
+            }
+        }
+    } else {
+        for i in 0..n {
+            for j in i + 1..n {
+                f(i, j, min_image(pos[i] - pos[j], l));
+            }
+        }
+    }
+}
+
+pub(crate) fn wrap(p: DVec3, l: DVec3) -> DVec3 {
     DVec3::new(
         p.x.rem_euclid(l.x),
         p.y.rem_euclid(l.y),
@@ -138,7 +148,7 @@ fn wrap(p: DVec3, l: DVec3) -> DVec3 {
     )
 }
 
-fn min_image(mut d: DVec3, l: DVec3) -> DVec3 {
+pub(crate) fn min_image(mut d: DVec3, l: DVec3) -> DVec3 {
     for a in 0..3 {
         d[a] -= l[a] * (d[a] / l[a]).round();
     }
@@ -390,6 +400,10 @@ pub struct Observers {
     pub series: Option<Series>,
     /// Trajectory frames (written by the output module).
     pub trajectory: Option<crate::output::Trajectory>,
+    /// The per-sample series behind the summary's error bars.
+    pub samples: Option<crate::smooth::Samples>,
+    /// The smooth potential evaluated at every sample (terraced rods and Gay–Berne).
+    pub smooth: Option<Box<dyn crate::smooth::Evaluate>>,
 }
 
 impl Sampler for Observers {
@@ -402,6 +416,9 @@ impl Sampler for Observers {
         }
         if let Some(s) = &mut self.series {
             s.sample(view);
+        }
+        if let Some(s) = &mut self.samples {
+            s.sample(view, self.smooth.as_ref().map(|e| e.evaluate(view)));
         }
     }
 

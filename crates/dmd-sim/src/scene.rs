@@ -747,6 +747,10 @@ pub struct OutputSpec {
     /// An SVG plot next to each CSV file (default true).
     #[serde(default = "yes")]
     pub plots: bool,
+    /// Evaluate the smooth potential (`[smd] smoothing`) at every sample of a terraced run of
+    /// rods or Gay–Berne bodies: `potential_energy_per_body_smooth`, `pressure_smooth`
+    /// (default: on for those scenes when `sample_interval` is given).
+    pub smooth_estimators: Option<bool>,
 }
 
 fn yes() -> bool {
@@ -764,6 +768,7 @@ impl Default for OutputSpec {
             series: false,
             trajectory: None,
             plots: true,
+            smooth_estimators: None,
         }
     }
 }
@@ -1150,6 +1155,23 @@ impl Scene {
         }
         // Outputs.
         let o = &self.output;
+        if o.smooth_estimators == Some(true) {
+            if !self.has_terraced_smooth_potential() {
+                return Err(SceneError::invalid(
+                    "output.smooth_estimators",
+                    "the smooth estimators evaluate the continuous potential of terraced rods or \
+                     Gay–Berne bodies; this scene has none (stepped spheres, Lennard-Jones \
+                     steps and site molecules are not estimated)",
+                ));
+            }
+            if o.sample_interval.is_none() {
+                return Err(SceneError::invalid(
+                    "output.smooth_estimators",
+                    "needs output.sample_interval: the smooth potential is evaluated at every \
+                     sample",
+                ));
+            }
+        }
         let wants_samples = o.rdf.is_some() || o.msd.is_some() || o.vacf.is_some() || o.series;
         match o.sample_interval {
             Some(dt) => positive("output.sample_interval", dt)?,

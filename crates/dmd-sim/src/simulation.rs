@@ -215,6 +215,8 @@ pub struct View<'a> {
     pub axes: Vec<DVec3>,
     /// Rotational kinetic energy now (0 for spheres).
     pub rotational_kinetic: f64,
+    /// Rotational degrees of freedom (included in `dof`; 0 for spheres).
+    pub rotational_dof: f64,
 }
 
 impl View<'_> {
@@ -1202,6 +1204,7 @@ where
                 .map_while(|i| self.model.axis(i, self.now))
                 .collect(),
             rotational_kinetic: self.model.rotational_kinetic(),
+            rotational_dof: self.model.rotational_dof(),
         }
     }
 
