@@ -222,6 +222,9 @@ fn dmd_production(
             format!("output.orientation_acf.max_lag={MAX_LAG_PS}"),
             "output.series=false".to_owned(),
             "output.plots=false".to_owned(),
+            // The cost compared is that of the dynamics and the observables compared; the
+            // smooth estimators (on by default for rods) are not among them.
+            "output.smooth_estimators=false".to_owned(),
         ],
         Some(&dir),
     )?;

@@ -141,6 +141,34 @@ fn the_smd_engine_reports_its_own_values_under_the_smooth_names() {
     );
 }
 
+/// At ΔV = kT/4 the terraced trajectory's estimate of the continuous model's energy is closer
+/// to standard MD on the smoothed potential than the terraced energy itself (which misses the
+/// tail beyond the outermost level and the energy within each terrace).
+#[test]
+fn at_a_quarter_kt_the_smooth_estimate_is_closer_to_standard_md_than_the_terraces() {
+    let dmd = run(RODS, &["pair.0.terraces.step_kt=0.25", "run.time=1"]);
+    let o: Vec<String> = ["engine=\"smd\"", "run.time=1"]
+        .iter()
+        .map(|s| (*s).to_owned())
+        .collect();
+    let scene = Scene::from_str_with(RODS, &o).unwrap();
+    let smd = dmd_sim::smd_engine::run(&scene, Path::new("."), None).unwrap();
+    let reference = smd.potential_energy_per_body;
+    let smooth = dmd.potential_energy_per_body_smooth.unwrap();
+    let terraced = dmd.potential_energy_per_body;
+    eprintln!(
+        "U/N: smd {reference} ± {}, dmd smooth {smooth} ± {:?}, dmd terraced {terraced} ± {:?}",
+        smd.potential_energy_per_body_error,
+        dmd.potential_energy_per_body_smooth_error,
+        dmd.potential_energy_per_body_error
+    );
+    assert!(
+        (smooth - reference).abs() < (terraced - reference).abs(),
+        "smooth {smooth}, terraced {terraced}, smd {reference}"
+    );
+    assert!(dmd.relative_energy_drift <= 1e-12);
+}
+
 /// Compares the estimator with an all-pairs sum at every sample.
 struct BruteForce {
     estimator: Estimator<LjRod>,
