@@ -693,10 +693,12 @@ impl Context<'_> {
             }
             // NVE production starts at the bath temperature, not wherever the stochastic
             // thermostat left the kinetic energy (as the smd engine's last rescaling does).
-            if had_thermostat && scene.hmc.is_none() && scene.thermostat.rescales_at_end() {
-                if let Some(a) = andersen {
-                    sim.rescale_to_temperature(a.temperature);
-                }
+            if had_thermostat
+                && scene.hmc.is_none()
+                && scene.thermostat.rescales_at_end()
+                && let Some(a) = andersen
+            {
+                sim.rescale_to_temperature(a.temperature);
             }
             let (p0, _) = sim.momentum_and_mass();
             let k0 = sim.kinetic_energy();
