@@ -536,6 +536,8 @@ fn terraces(args: &Args, r: &mut Report, w: &mut String, work: &Path) -> Result<
             format!("run.time={time}"),
             "run.equilibration_time=2".to_owned(),
             "output.sample_interval=0.02".to_owned(),
+            // The CPU time reported is the terraces' own, without the smooth estimators.
+            "output.smooth_estimators=false".to_owned(),
         ];
         o.extend_from_slice(extra);
         o

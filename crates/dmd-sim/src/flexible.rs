@@ -1537,6 +1537,24 @@ impl PairModel for Flexible {
             }
         }
     }
+
+    fn scale_rotations(&mut self, now: f64, factor: f64) {
+        // Each molecule restarts at `now` from its interpolated state with its internal
+        // velocities scaled (brought first to the kinetic energy of its start when `rescale`
+        // is on, as at events, so that the scaled energy is factor² times the tracked one).
+        for i in 0..self.trajectories.len() as u32 {
+            let ty = self.body_type[i as usize] as usize;
+            let state = self.trajectories[i as usize].state_at(&self.constraints[ty], now);
+            let done = state.and_then(|(q, mut u)| {
+                self.rescale(i as usize, &mut u);
+                let keep = self.rattle.rescale;
+                self.restart(i, now, q, u.into_iter().map(|x| factor * x).collect(), keep)
+            });
+            if done.is_err() {
+                self.flex.failures += 1;
+            }
+        }
+    }
 }
 
 #[cfg(test)]

@@ -777,6 +777,10 @@ impl<M: PairModel> PairModel for Faulty<M> {
         self.inner.reverse_rotations();
     }
 
+    fn scale_rotations(&mut self, now: f64, factor: f64) {
+        self.inner.scale_rotations(now, factor);
+    }
+
     fn begin_segment(&mut self, segment: u64) {
         self.key = mix(self.salt ^ segment);
         self.active = true;

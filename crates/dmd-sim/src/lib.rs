@@ -75,6 +75,7 @@ pub mod site_scene;
 pub mod sites;
 // Issue 8: the standard-MD engine on the same scenes.
 pub mod smd_engine;
+pub mod smooth;
 pub mod sum;
 pub mod terraced;
 pub mod units;

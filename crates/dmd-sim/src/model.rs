@@ -315,6 +315,17 @@ pub trait PairModel {
     #[inline(always)]
     fn reverse_rotations(&mut self) {}
 
+    /// Multiplies every body's angular (or internal) velocity by `factor` at time `now`, each
+    /// body's motion restarted there with the scaled velocity: the end of a thermostatted
+    /// equilibration scales translation and rotation by one factor so that production starts
+    /// at the bath temperature with the equipartition of the moment kept. The loop scales the
+    /// translational velocities and re-predicts every event afterwards. Models without
+    /// rotations do nothing (their rotational kinetic energy is 0); the loop reads the
+    /// rotational kinetic energy back afterwards, so a model that could not scale a body
+    /// leaves the loop to reach the target with the translational factor.
+    #[inline(always)]
+    fn scale_rotations(&mut self, _now: f64, _factor: f64) {}
+
     /// HMC begins segment number `segment` (the fault-injection wrapper of `hmc` re-draws
     /// which pairs it hides; models do nothing).
     #[inline(always)]

@@ -131,6 +131,13 @@ pub struct Summary {
     pub box_lengths: [f64; 3],
     /// Time-averaged kinetic temperature, `2⟨K⟩ / dof`.
     pub temperature: f64,
+    /// Block-average error of the mean kinetic temperature, from the instantaneous one at
+    /// every sample (Flyvbjerg–Petersen, [`block_average`](crate::hmc::block_average);
+    /// `null` without `output.sample_interval` or with fewer than 16 samples).
+    pub temperature_error: Option<f64>,
+    /// Kinetic temperature `2K/dof` at the start of production: the bath temperature exactly
+    /// when a thermostatted equilibration ended with `thermostat.rescale_at_end` (default).
+    pub temperature_start: f64,
     /// Degrees of freedom of the temperature (3N − 3 in NVE, 3N with a thermostat).
     pub degrees_of_freedom: f64,
     /// Pressure from the collision virial: `(N kT + Σ r_ij·Δp_i / 3t) / V`.
@@ -139,6 +146,8 @@ pub struct Summary {
     pub pressure_ideal: f64,
     /// Excess (virial) part of the pressure.
     pub pressure_excess: f64,
+    /// Block-average error of `pressure`, from its mean over each sampling interval.
+    pub pressure_error: Option<f64>,
     /// Compressibility factor `Z = P V / (N kT)`.
     pub compressibility: f64,
     /// Mean time between pair events of a body, `N t / (2 × pair events)`.
@@ -151,6 +160,20 @@ pub struct Summary {
     pub energy_potential: f64,
     /// Time-averaged potential energy per body.
     pub potential_energy_per_body: f64,
+    /// Block-average error of `potential_energy_per_body`, from the samples.
+    pub potential_energy_per_body_error: Option<f64>,
+    /// Mean over the samples of the smooth potential energy per body (terraced rods and
+    /// Gay–Berne: the continuous potential, cut and switched as by the smd engine, evaluated
+    /// at the sampled configurations; `output.smooth_estimators`).
+    pub potential_energy_per_body_smooth: Option<f64>,
+    /// Its block-average error.
+    pub potential_energy_per_body_smooth_error: Option<f64>,
+    /// Mean over the samples of the smooth potential's pressure `(N kT_t + W/3)/V`, `W` its
+    /// molecular virial and `kT_t` the instantaneous translational temperature (the smd
+    /// engine's formula).
+    pub pressure_smooth: Option<f64>,
+    /// Its block-average error.
+    pub pressure_smooth_error: Option<f64>,
     /// Total energy at the start of production.
     pub energy_total_start: f64,
     /// Total energy at the end.
@@ -337,6 +360,7 @@ pub fn run_scene_with(
         units,
         model_name: plan.name(),
         options,
+        smooth: std::cell::Cell::new(None),
     };
     if fault > 0.0 {
         // Checked with the scene: fault injection is for sphere scenes.
@@ -388,10 +412,14 @@ pub fn run_scene_with(
             }
         }
         Plan::Rods(tables) => {
+            ctx.smooth
+                .set(crate::smooth::estimator(scene, config.lengths, &tables)?);
             let model = terraced_model(scene, base, &config, tables)?;
             ctx.go_any_queue(model, reporter)
         }
         Plan::GayBerne(tables) => {
+            ctx.smooth
+                .set(crate::smooth::estimator(scene, config.lengths, &tables)?);
             let model = terraced_model(scene, base, &config, tables)?;
             ctx.go_any_queue(model, reporter)
         }
@@ -471,6 +499,8 @@ struct Context<'a> {
     units: Units,
     model_name: &'static str,
     options: &'a RunOptions,
+    /// The smooth estimator of a terraced scene, taken by the run.
+    smooth: std::cell::Cell<Option<Box<dyn crate::smooth::Evaluate>>>,
 }
 
 impl Context<'_> {
@@ -623,6 +653,10 @@ impl Context<'_> {
         if o.series {
             observers.series = Some(Series::default());
         }
+        if o.sample_interval.is_some() {
+            observers.samples = Some(crate::smooth::Samples::default());
+            observers.smooth = self.smooth.take();
+        }
         let out = self.out;
         if let (Some(_), Some(dir)) = (&o.trajectory, out) {
             let names = scene.species.iter().map(|s| s.name.clone()).collect();
@@ -644,7 +678,8 @@ impl Context<'_> {
         if fresh_production {
             let wants_samples = observers.rdf.is_some()
                 || observers.correlations.is_some()
-                || observers.series.is_some();
+                || observers.series.is_some()
+                || observers.samples.is_some();
             sim.begin_phase(
                 had_thermostat && production_thermostat.is_none(),
                 o.sample_interval.filter(|_| wants_samples),
@@ -655,6 +690,15 @@ impl Context<'_> {
             );
             if scene.hmc.is_some() {
                 sim.move_origin_here();
+            }
+            // NVE production starts at the bath temperature, not wherever the stochastic
+            // thermostat left the kinetic energy (as the smd engine's last rescaling does).
+            if had_thermostat
+                && scene.hmc.is_none()
+                && scene.thermostat.rescales_at_end()
+                && let Some(a) = andersen
+            {
+                sim.rescale_to_temperature(a.temperature);
             }
             let (p0, _) = sim.momentum_and_mass();
             let k0 = sim.kinetic_energy();
@@ -673,6 +717,7 @@ impl Context<'_> {
             observers.rdf = c.observers.rdf.clone();
             observers.correlations = c.observers.correlations.clone();
             observers.series = c.observers.series.clone();
+            observers.samples = c.observers.samples.clone();
         }
         let (k0, e0, p0, p_scale) = run.record.start.expect("set when production starts");
         let p0 = DVec3::from_array(p0);
@@ -771,6 +816,7 @@ impl Context<'_> {
         .map(|(k, v)| (k.to_owned(), v))
         .collect();
         let qs = sim.schedule_stats();
+        let sampled = observers.samples.as_ref().map(|s| s.summary(n as usize));
         let mut summary = Summary {
             engine: "dmd".to_owned(),
             events: counters.events,
@@ -786,10 +832,13 @@ impl Context<'_> {
             density: n / volume,
             box_lengths: lengths.to_array(),
             temperature: u.temperature_out(kt),
+            temperature_start: u.temperature_out(2.0 * k0 / dof),
+            temperature_error: sampled.map(|s| u.temperature_out(s.temperature.error)),
             degrees_of_freedom: dof,
             pressure: u.pressure_out(ideal + excess),
             pressure_ideal: u.pressure_out(ideal),
             pressure_excess: u.pressure_out(excess),
+            pressure_error: sampled.map(|s| u.pressure_out(s.pressure.error)),
             compressibility: (ideal + excess) * volume / (n * kt),
             mean_free_time: n * t / (2.0 * pair_events as f64),
             collision_rate: 2.0 * pair_events as f64 / (n * t),
@@ -800,6 +849,20 @@ impl Context<'_> {
             } else {
                 u1 / n
             }),
+            potential_energy_per_body_error: sampled
+                .map(|s| u.energy_out(s.potential_per_body.error)),
+            potential_energy_per_body_smooth: sampled
+                .and_then(|s| s.potential_smooth_per_body)
+                .map(|b| u.energy_out(b.mean)),
+            potential_energy_per_body_smooth_error: sampled
+                .and_then(|s| s.potential_smooth_per_body)
+                .map(|b| u.energy_out(b.error)),
+            pressure_smooth: sampled
+                .and_then(|s| s.pressure_smooth)
+                .map(|b| u.pressure_out(b.mean)),
+            pressure_smooth_error: sampled
+                .and_then(|s| s.pressure_smooth)
+                .map(|b| u.pressure_out(b.error)),
             energy_total_start: u.energy_out(e0),
             energy_total_end: u.energy_out(e1),
             relative_energy_drift: (e1 - e0).abs() / e0.abs().max(k0),
@@ -984,6 +1047,7 @@ impl Driver {
                     correlations: observers.correlations.clone(),
                     series: observers.series.clone(),
                     trajectory,
+                    samples: observers.samples.clone(),
                 },
                 chain: chain.clone(),
             })
@@ -1199,6 +1263,17 @@ fn choose_skin(
     let lower = if hard { 0.25 } else { 0.1 };
     let skin = (0.3 * mean_free_path).clamp(lower * reach, 2.0 * reach);
     Ok(skin.min(0.999 * fit))
+}
+
+/// Names of the units of a summary's `units` (`reduced` or `molecular`): `(length, time,
+/// energy, temperature, pressure)`, as [`Units::names`].
+pub fn unit_names(units: &str) -> [&'static str; 5] {
+    let system = if units == "molecular" {
+        crate::scene::UnitSystem::Molecular
+    } else {
+        crate::scene::UnitSystem::Reduced
+    };
+    Units::of(system).names()
 }
 
 /// CPU time of the calling thread, from `/proc/thread-self/schedstat` (Linux).

@@ -637,6 +637,20 @@ pub struct ThermostatSpec {
     /// `equilibration` (default) or `always`.
     #[serde(default)]
     pub during: ThermostatPhase,
+    /// Scale all velocities (translational and rotational, one factor) when equilibration
+    /// ends, so that NVE production starts at the bath temperature exactly (default true;
+    /// only with `during = "equilibration"`).
+    pub rescale_at_end: Option<bool>,
+}
+
+impl ThermostatSpec {
+    /// Whether production starts with the velocities scaled to the bath temperature: an
+    /// Andersen thermostat that stops when equilibration ends, and `rescale_at_end` not off.
+    pub fn rescales_at_end(&self) -> bool {
+        self.kind == ThermostatKind::Andersen
+            && self.during == ThermostatPhase::Equilibration
+            && self.rescale_at_end.unwrap_or(true)
+    }
 }
 
 /// Which priority queue schedules the events.
@@ -737,6 +751,10 @@ pub struct OutputSpec {
     /// An SVG plot next to each CSV file (default true).
     #[serde(default = "yes")]
     pub plots: bool,
+    /// Evaluate the smooth potential (`[smd] smoothing`) at every sample of a terraced run of
+    /// rods or Gay–Berne bodies: `potential_energy_per_body_smooth`, `pressure_smooth`
+    /// (default: on for those scenes when `sample_interval` is given).
+    pub smooth_estimators: Option<bool>,
 }
 
 fn yes() -> bool {
@@ -754,6 +772,7 @@ impl Default for OutputSpec {
             series: false,
             trajectory: None,
             plots: true,
+            smooth_estimators: None,
         }
     }
 }
@@ -1070,6 +1089,13 @@ impl Scene {
                         "`rate` and `temperature` are given but no thermostat is chosen (kind = \"andersen\")",
                     ));
                 }
+                if t.rescale_at_end.is_some() {
+                    return Err(SceneError::invalid(
+                        "thermostat.rescale_at_end",
+                        "there is no thermostat (kind = \"none\"): nothing ends equilibration at \
+                         a temperature to rescale to",
+                    ));
+                }
             }
             ThermostatKind::Andersen => {
                 let rate = t.rate.ok_or_else(|| {
@@ -1081,6 +1107,14 @@ impl Scene {
                 positive("thermostat.rate", rate)?;
                 if let Some(temp) = t.temperature {
                     positive("thermostat.temperature", temp)?;
+                }
+                if t.rescale_at_end == Some(true) && t.during == ThermostatPhase::Always {
+                    return Err(SceneError::invalid(
+                        "thermostat.rescale_at_end",
+                        "the thermostat acts in production too (during = \"always\"): there is \
+                         no end of equilibration to rescale at; remove the key or use during = \
+                         \"equilibration\"",
+                    ));
                 }
             }
         }
@@ -1125,6 +1159,23 @@ impl Scene {
         }
         // Outputs.
         let o = &self.output;
+        if o.smooth_estimators == Some(true) {
+            if !self.has_terraced_smooth_potential() {
+                return Err(SceneError::invalid(
+                    "output.smooth_estimators",
+                    "the smooth estimators evaluate the continuous potential of terraced rods or \
+                     Gay–Berne bodies; this scene has none (stepped spheres, Lennard-Jones \
+                     steps and site molecules are not estimated)",
+                ));
+            }
+            if o.sample_interval.is_none() {
+                return Err(SceneError::invalid(
+                    "output.smooth_estimators",
+                    "needs output.sample_interval: the smooth potential is evaluated at every \
+                     sample",
+                ));
+            }
+        }
         let wants_samples = o.rdf.is_some() || o.msd.is_some() || o.vacf.is_some() || o.series;
         match o.sample_interval {
             Some(dt) => positive("output.sample_interval", dt)?,

@@ -215,6 +215,8 @@ pub struct View<'a> {
     pub axes: Vec<DVec3>,
     /// Rotational kinetic energy now (0 for spheres).
     pub rotational_kinetic: f64,
+    /// Rotational degrees of freedom (included in `dof`; 0 for spheres).
+    pub rotational_dof: f64,
 }
 
 impl View<'_> {
@@ -1150,6 +1152,39 @@ where
         self.schedule_system();
     }
 
+    /// Scales every velocity so that the kinetic temperature `2K/dof` is `kt` (the end of a
+    /// thermostatted equilibration): rotations by the model
+    /// ([`PairModel::scale_rotations`]) and translations by one factor `√(kt dof / 2K)`,
+    /// the translational one then adjusted by round-off so that the total is `kt` exactly
+    /// whatever the model's rotors made of theirs. Every event is predicted afresh (the
+    /// momentum refresh of hybrid Monte Carlo). Returns the factor.
+    pub fn rescale_to_temperature(&mut self, kt: f64) -> f64 {
+        let target = 0.5 * self.dof() * kt;
+        let k = self.kinetic_energy();
+        if !(k > 0.0 && target > 0.0) {
+            return 1.0;
+        }
+        let f = (target / k).sqrt();
+        self.refresh_momenta(|bodies, now, masses, model| {
+            model.scale_rotations(now, f);
+            let rotational = model.rotational_kinetic();
+            let mut translational = Compensated::ZERO;
+            for b in bodies.iter() {
+                translational.add(0.5 * masses[b.species as usize] * b.v.length_squared());
+            }
+            let translational = translational.value();
+            let g = if translational > 0.0 && target > rotational {
+                ((target - rotational) / translational).sqrt()
+            } else {
+                f
+            };
+            for b in bodies {
+                b.v *= g;
+            }
+        });
+        f
+    }
+
     // ----- measurements ---------------------------------------------------------------------
 
     fn view(&self) -> View<'_> {
@@ -1169,6 +1204,7 @@ where
                 .map_while(|i| self.model.axis(i, self.now))
                 .collect(),
             rotational_kinetic: self.model.rotational_kinetic(),
+            rotational_dof: self.model.rotational_dof(),
         }
     }
 

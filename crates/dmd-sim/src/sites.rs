@@ -1652,6 +1652,20 @@ impl PairModel for Sites {
     fn search_stats(&self) -> Option<SearchStats> {
         Some(self.stats)
     }
+
+    fn scale_rotations(&mut self, now: f64, factor: f64) {
+        // Each molecule restarts at `now` from its present attitude with its body-frame
+        // angular velocity scaled, as a thermostat collision restarts it with a fresh one.
+        for (r, &ty) in self.rotations.iter_mut().zip(&self.body_type) {
+            let p = r.motion.pose(now - r.t);
+            let q = DQuat::from_mat3(&p.orientation).normalize();
+            if let Ok(motion) =
+                FreeMotion::from_quat(&self.types[ty as usize].moments, q, factor * p.omega)
+            {
+                *r = Rotation { motion, t: now };
+            }
+        }
+    }
 }
 
 /// A body-frame angular velocity drawn from equipartition at `kt`: each principal component

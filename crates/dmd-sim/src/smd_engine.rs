@@ -245,6 +245,13 @@ pub fn check(scene: &Scene) -> Result<(), SceneError> {
              equilibration only); use `during = \"equilibration\"`",
         );
     }
+    if scene.thermostat.rescale_at_end == Some(false) {
+        return refuse(
+            "thermostat.rescale_at_end",
+            "the smd engine thermostats by velocity rescaling, whose last rescaling ends \
+             equilibration at the bath temperature; remove the key",
+        );
+    }
     let pot = scene.pair[0].potential.expect("checked above");
     let (r_l, r_u) = window(scene, &pot);
     if r_l >= r_u {
@@ -266,7 +273,7 @@ pub fn check(scene: &Scene) -> Result<(), SceneError> {
 }
 
 /// The smoothing window of a scene: `[smd.smoothing]` or [`default_window`].
-fn window(scene: &Scene, pot: &PotentialSpec) -> (f64, f64) {
+pub(crate) fn window(scene: &Scene, pot: &PotentialSpec) -> (f64, f64) {
     let (dl, du) = default_window(pot);
     let w = scene
         .smd
@@ -360,8 +367,12 @@ pub struct SmdSummary {
     pub equilibration_time: f64,
     /// Mean kinetic temperature over all degrees of freedom (`3N − 3` translational).
     pub temperature: f64,
-    /// Its block-average error.
+    /// Its block-average error (Flyvbjerg–Petersen, as the event-driven engine's).
     pub temperature_error: f64,
+    /// Kinetic temperature at the start of production: the bath temperature exactly after a
+    /// thermostatted equilibration (its last velocity rescaling), as in the event-driven
+    /// engine with `thermostat.rescale_at_end` (default).
+    pub temperature_start: f64,
     /// Mean translational temperature.
     pub translational_temperature: f64,
     /// Mean rotational temperature (rods).
@@ -370,10 +381,22 @@ pub struct SmdSummary {
     pub pressure: f64,
     /// Its block-average error.
     pub pressure_error: f64,
+    /// `pressure` again, under the name the event-driven engine gives its estimate of the
+    /// smooth potential's pressure, so that scripts compare one key across engines.
+    pub pressure_smooth: f64,
+    /// Its block-average error.
+    pub pressure_smooth_error: f64,
     /// Compressibility factor `P V / (N kT)`.
     pub compressibility: f64,
     /// Mean potential energy per body.
     pub potential_energy_per_body: f64,
+    /// Its block-average error.
+    pub potential_energy_per_body_error: f64,
+    /// `potential_energy_per_body` again, under the event-driven engine's name for its
+    /// estimate of the smooth potential energy.
+    pub potential_energy_per_body_smooth: f64,
+    /// Its block-average error.
+    pub potential_energy_per_body_smooth_error: f64,
     /// Kinetic energy at the end.
     pub energy_kinetic: f64,
     /// Potential energy at the end.
@@ -778,6 +801,7 @@ impl Job<'_> {
             .reporter
             .phase("production", Stop::Time(self.production_steps as f64 * dt));
         let e0 = md.energy();
+        let kt_start = md.snapshot().temperature();
         let wall = std::time::Instant::now();
         let cpu0 = thread_cpu_seconds();
         // Sampled every step: the series pressure averages the virial over each sampling
@@ -795,6 +819,23 @@ impl Job<'_> {
         // Summary.
         let u = self.units;
         let sm = smd::observe::Summary::of(&bridge.rows, n);
+        // The errors by the event-driven engine's blocking, so that the engines' error bars
+        // mean the same.
+        let blocked = |f: fn(&smd::observe::SeriesRow) -> f64| {
+            crate::hmc::block_average(&bridge.rows.iter().map(f).collect::<Vec<_>>()).error
+        };
+        let nb = n as f64;
+        let potential_error = u.energy_out(
+            crate::hmc::block_average(
+                &bridge
+                    .rows
+                    .iter()
+                    .map(|r| r.potential / nb)
+                    .collect::<Vec<_>>(),
+            )
+            .error,
+        );
+        let pressure_error = u.pressure_out(blocked(|r| r.pressure));
         let s = md.system();
         let nf = n as f64;
         let volume = s.volume();
@@ -825,13 +866,19 @@ impl Job<'_> {
             sim_time: stats.simulated_time,
             equilibration_time: self.eq_steps as f64 * self.settings.dt,
             temperature: u.temperature_out(sm.temperature.mean),
-            temperature_error: u.temperature_out(sm.temperature.error),
+            temperature_error: u.temperature_out(blocked(|r| r.temperature)),
+            temperature_start: u.temperature_out(kt_start),
             translational_temperature: u.temperature_out(sm.temperature_translational.mean),
             rotational_temperature: mean_t_rot.map(|t| u.temperature_out(t)),
             pressure: u.pressure_out(sm.pressure.mean),
-            pressure_error: u.pressure_out(sm.pressure.error),
+            pressure_error,
+            pressure_smooth: u.pressure_out(sm.pressure.mean),
+            pressure_smooth_error: pressure_error,
             compressibility: sm.pressure.mean * volume / (nf * sm.temperature.mean),
             potential_energy_per_body: u.energy_out(sm.potential_per_body.mean),
+            potential_energy_per_body_error: potential_error,
+            potential_energy_per_body_smooth: u.energy_out(sm.potential_per_body.mean),
+            potential_energy_per_body_smooth_error: potential_error,
             energy_kinetic: u.energy_out(e1.kinetic()),
             energy_potential: u.energy_out(e1.potential),
             energy_total_start: u.energy_out(e0.total()),
@@ -936,6 +983,7 @@ impl Bridge<'_> {
             dof: sys.dof_translational() + sys.dof_rotational(),
             axes: sys.axes().to_vec(),
             rotational_kinetic: s.energy.kinetic_rotational,
+            rotational_dof: sys.dof_rotational(),
         }
     }
 }

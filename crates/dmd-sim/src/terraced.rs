@@ -1305,6 +1305,17 @@ impl<P: PairPotential> PairModel for Terraced<P> {
         self.stats = stats_from_counts(c);
         Ok(())
     }
+
+    fn scale_rotations(&mut self, now: f64, factor: f64) {
+        // Each rotor restarts at `now` from its present axis with the scaled angular velocity
+        // (a linear rotor's ω stays perpendicular to its axis, so the scaled one is a valid
+        // state and its energy is exactly factor² times the old one up to round-off).
+        for r in &mut self.rods {
+            if let Ok(rotor) = LinearRotor::new(r.axis(now), factor * r.rotor.omega()) {
+                *r = Rod { rotor, t: now };
+            }
+        }
+    }
 }
 
 /// Numbers per rod in [`PairModel::extra_state`]: the rotor's parts and its clock.

@@ -182,6 +182,7 @@ fn print_summary(s: &Summary, out: &std::path::Path) {
         "  momentum drift {:.2e}   anomalies {}",
         s.momentum_drift, s.anomalies
     );
+    print_estimates(s);
     if let Some(d) = s.diffusion_msd {
         println!("  diffusion (MSD) {d:.6}");
     }
@@ -270,7 +271,10 @@ fn main() -> ExitCode {
                 return run_smd(&scene, &s, &base, &out, checkpoint_every.is_some(), quiet);
             }
             if s.smd.is_some() && !quiet {
-                println!("dmd: note: [smd] is ignored by the event-driven engine");
+                println!(
+                    "dmd: note: the event-driven engine uses only [smd] smoothing (for the smooth \
+                     estimators)"
+                );
             }
             let every = match checkpoint_every.as_deref().map(Every::parse).transpose() {
                 Ok(e) => e,
@@ -375,6 +379,30 @@ fn run_smd(
     }
 }
 
+/// Production temperature and the smooth estimators with error bars and units (lines printed
+/// only for what the run measured).
+fn print_estimates(s: &Summary) {
+    let [_, _, e, t, p] = dmd_sim::run::unit_names(&s.units);
+    let pm = |x: Option<f64>| x.map_or(String::new(), |x| format!(" ± {x:.3}"));
+    println!(
+        "  production    T {:.3}{} {t} (started at {:.6} {t}), U/N {:.4}{} {e}, P {:.3}{} {p}",
+        s.temperature,
+        pm(s.temperature_error),
+        s.temperature_start,
+        s.potential_energy_per_body,
+        pm(s.potential_energy_per_body_error),
+        s.pressure,
+        pm(s.pressure_error)
+    );
+    if let (Some(u), Some(pr)) = (s.potential_energy_per_body_smooth, s.pressure_smooth) {
+        println!(
+            "  smooth model  U/N {u:.4}{} {e}, P {pr:.3}{} {p} (the continuous potential at the samples)",
+            pm(s.potential_energy_per_body_smooth_error),
+            pm(s.pressure_smooth_error)
+        );
+    }
+}
+
 fn print_smd_summary(s: &SmdSummary, out: &std::path::Path) {
     println!(
         "dmd (engine smd): {} bodies ({}), density {:.6}",
@@ -391,6 +419,15 @@ fn print_smd_summary(s: &SmdSummary, out: &std::path::Path) {
     println!(
         "  temperature   {:.6} ± {:.6}   pressure {:.6} ± {:.6} (Z = {:.6})",
         s.temperature, s.temperature_error, s.pressure, s.pressure_error, s.compressibility
+    );
+    let [_, _, e, t, p] = dmd_sim::run::unit_names(&s.units);
+    println!(
+        "  production    started at T {:.6} {t}; U/N {:.4} ± {:.4} {e}, P {:.3} ± {:.3} {p} (the smooth model)",
+        s.temperature_start,
+        s.potential_energy_per_body_smooth,
+        s.potential_energy_per_body_smooth_error,
+        s.pressure_smooth,
+        s.pressure_smooth_error
     );
     println!(
         "  energy        {:.12e} -> {:.12e} (relative drift {:.2e}), U/N {:.6}",
