@@ -150,7 +150,11 @@ fn bench(c: &mut Criterion) {
         .map(|(f, &u)| {
             let x = rod.taylor_model(f, 0.0).unwrap().x;
             let t = map.terrace_of(u).unwrap_or(0);
-            let lo = if t == 0 { f64::NEG_INFINITY } else { levels[t - 1] };
+            let lo = if t == 0 {
+                f64::NEG_INFINITY
+            } else {
+                levels[t - 1]
+            };
             let hi = levels.get(t).copied().unwrap_or(map.core());
             let iv = rod.coordinate_intervals(lo, hi);
             potential::certify::interval_containing(&iv, x).unwrap_or((x, x))

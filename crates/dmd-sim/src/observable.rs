@@ -446,8 +446,13 @@ pub struct Observers {
     pub trajectory: Option<crate::output::Trajectory>,
     /// The per-sample series behind the summary's error bars.
     pub samples: Option<crate::smooth::Samples>,
-    /// The smooth potential evaluated at every sample (terraced rods and Gay–Berne).
+    /// The smooth potential (terraced rods and Gay–Berne), evaluated at every
+    /// `smooth_every`-th sample.
     pub smooth: Option<Box<dyn crate::smooth::Evaluate>>,
+    /// Samples between evaluations of the smooth potential (`output.smooth_every`; 0 counts
+    /// as 1). The count is the sample's index in `samples`, which checkpoints keep, so a
+    /// resumed run evaluates at the same samples.
+    pub smooth_every: u64,
 }
 
 impl Sampler for Observers {
@@ -462,7 +467,13 @@ impl Sampler for Observers {
             s.sample(view);
         }
         if let Some(s) = &mut self.samples {
-            s.sample(view, self.smooth.as_ref().map(|e| e.evaluate(view)));
+            let due = (s.rows().len() as u64).is_multiple_of(self.smooth_every.max(1));
+            let smooth = self
+                .smooth
+                .as_ref()
+                .filter(|_| due)
+                .map(|e| e.evaluate(view));
+            s.sample(view, smooth);
         }
     }
 

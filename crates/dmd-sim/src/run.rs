@@ -656,6 +656,7 @@ impl Context<'_> {
         if o.sample_interval.is_some() {
             observers.samples = Some(crate::smooth::Samples::default());
             observers.smooth = self.smooth.take();
+            observers.smooth_every = o.smooth_every.unwrap_or(crate::scene::DEFAULT_SMOOTH_EVERY);
         }
         let out = self.out;
         if let (Some(_), Some(dir)) = (&o.trajectory, out) {

@@ -214,13 +214,19 @@ impl Samples {
         &self.rows
     }
 
-    /// Means and errors over the samples of `n` bodies (the smooth ones only if every sample
-    /// has them).
+    /// Means and errors over the samples of `n` bodies (the smooth ones over the samples that
+    /// evaluated them, every `output.smooth_every`-th).
     pub fn summary(&self, n: usize) -> SampleSummary {
         let col = |f: &dyn Fn(&SampleRow) -> f64| -> Vec<f64> { self.rows.iter().map(f).collect() };
+        let smooth_col = |f: &dyn Fn(&SampleRow) -> f64| -> Vec<f64> {
+            self.rows
+                .iter()
+                .filter(|r| !r.potential_smooth.is_nan())
+                .map(f)
+                .collect()
+        };
         let nf = n as f64;
-        let smooth =
-            !self.rows.is_empty() && self.rows.iter().all(|r| !r.potential_smooth.is_nan());
+        let smooth = self.rows.iter().any(|r| !r.potential_smooth.is_nan());
         let pressures: Vec<f64> = col(&|r| r.pressure)
             .into_iter()
             .filter(|p| !p.is_nan())
@@ -230,8 +236,8 @@ impl Samples {
             potential_per_body: block_average(&col(&|r| r.potential / nf)),
             pressure: block_average(&pressures),
             potential_smooth_per_body: smooth
-                .then(|| block_average(&col(&|r| r.potential_smooth / nf))),
-            pressure_smooth: smooth.then(|| block_average(&col(&|r| r.pressure_smooth))),
+                .then(|| block_average(&smooth_col(&|r| r.potential_smooth / nf))),
+            pressure_smooth: smooth.then(|| block_average(&smooth_col(&|r| r.pressure_smooth))),
         }
     }
 }
