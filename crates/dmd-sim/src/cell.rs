@@ -66,15 +66,7 @@ impl CellGrid {
     /// # Errors
     /// The axis (0, 1, 2) along which fewer than 3 cells fit.
     pub fn new(lengths: DVec3, reach: f64, n_bodies: usize) -> Result<Self, usize> {
-        let mut fit = [0.0; 3];
-        for a in 0..3 {
-            fit[a] = (lengths[a] / reach).floor();
-            if fit[a].is_nan() || fit[a] < 3.0 {
-                return Err(a);
-            }
-        }
-        let n = smd::capped_cell_dims(fit, 3, u64::from(MAX_CELLS_PER_AXIS), max_cells(n_bodies))
-            .map(|k| k as u32);
+        let n = Self::dims_for(lengths, reach, n_bodies)?;
         let bounds = std::array::from_fn(|a| {
             let w = lengths[a] / f64::from(n[a]);
             let mut b: Vec<f64> = (0..n[a]).map(|k| f64::from(k) * w).collect();
@@ -93,6 +85,25 @@ impl CellGrid {
             slots: vec![u32::MAX; cells * cap],
             slot_of: vec![u32::MAX; n_bodies],
         })
+    }
+
+    /// The cells along each axis of the grid [`new`](Self::new) builds: as many as fit at
+    /// least `reach` wide, at most [`MAX_CELLS_PER_AXIS`] per axis and [`max_cells`] in all.
+    ///
+    /// # Errors
+    /// The axis (0, 1, 2) along which fewer than 3 cells fit.
+    pub fn dims_for(lengths: DVec3, reach: f64, n_bodies: usize) -> Result<[u32; 3], usize> {
+        let mut fit = [0.0; 3];
+        for a in 0..3 {
+            fit[a] = (lengths[a] / reach).floor();
+            if fit[a].is_nan() || fit[a] < 3.0 {
+                return Err(a);
+            }
+        }
+        Ok(
+            smd::capped_cell_dims(fit, 3, u64::from(MAX_CELLS_PER_AXIS), max_cells(n_bodies))
+                .map(|k| k as u32),
+        )
     }
 
     /// Cells along each axis.
@@ -277,27 +288,37 @@ mod tests {
 
     #[test]
     fn cells_are_bounded_by_the_number_of_bodies() {
-        // 108 bodies at density 1e-9: a box of 4.8e3 per edge would hold 1023³ cells.
+        // (The sizes are asked of `dims_for`, so that nothing large is allocated if the bound
+        // is ever lost.) 108 bodies at density 1e-9: a box of 4.8e3 per edge would hold 1023³
+        // cells, 27 GB of slots.
         let l = (108.0f64 / 1e-9).cbrt();
-        let g = CellGrid::new(DVec3::splat(l), 1.0, 108).unwrap();
-        assert!(g.n_cells() <= 216, "{:?}", g.dims());
-        assert_eq!(g.dims(), [6, 6, 6]);
-        // Every cell is at least the reach wide, and at least 3 per axis.
-        let g = CellGrid::new(DVec3::new(1e6, 3.5, 1e6), 1.0, 2).unwrap();
-        assert_eq!(g.n_cells(), 27);
-        assert_eq!(g.dims(), [3, 3, 3]);
-        let g = CellGrid::new(DVec3::new(1e6, 4.0, 2e6), 1.0, 1000).unwrap();
-        let [x, y, z] = g.dims();
-        assert!(g.n_cells() <= 2000 && g.n_cells() > 1500, "{:?}", g.dims());
-        assert!(y == 3 && z > x && x >= 3, "{:?}", g.dims());
+        assert_eq!(CellGrid::dims_for(DVec3::splat(l), 1.0, 108), Ok([6, 6, 6]));
         // A tiny reach (hard spheres of diameter 1e-8 at density 0.5).
-        let g = CellGrid::new(DVec3::splat(6.0), 5e-8, 108).unwrap();
-        assert_eq!(g.dims(), [6, 6, 6]);
+        assert_eq!(
+            CellGrid::dims_for(DVec3::splat(6.0), 5e-8, 108),
+            Ok([6, 6, 6])
+        );
+        // At least 3 per axis, and 27 cells whatever N.
+        assert_eq!(
+            CellGrid::dims_for(DVec3::new(1e6, 3.5, 1e6), 1.0, 2),
+            Ok([3, 3, 3])
+        );
+        let [x, y, z] = CellGrid::dims_for(DVec3::new(1e6, 4.0, 2e6), 1.0, 1000).unwrap();
+        let cells = x * y * z;
+        assert!(
+            cells <= 2000 && cells > 1500 && y == 3 && z > x && x >= 3,
+            "{x} {y} {z}"
+        );
         // A dense box is not touched: 4000 bodies at density 0.9 with cells 1.5 wide.
         let l = (4000.0f64 / 0.9).cbrt();
-        let g = CellGrid::new(DVec3::splat(l), 1.5, 4000).unwrap();
         let k = (l / 1.5).floor() as u32;
+        assert_eq!(
+            CellGrid::dims_for(DVec3::splat(l), 1.5, 4000),
+            Ok([k, k, k])
+        );
+        let g = CellGrid::new(DVec3::splat(l), 1.5, 4000).unwrap();
         assert_eq!(g.dims(), [k, k, k]);
+        assert_eq!(g.n_cells(), (k * k * k) as usize);
     }
 
     #[test]
