@@ -623,6 +623,7 @@ impl Context<'_> {
         if o.series {
             observers.series = Some(Series::default());
         }
+        observers.max_bytes = Some(crate::limits::max_bytes(scene));
         let out = self.out;
         if let (Some(_), Some(dir)) = (&o.trajectory, out) {
             let names = scene.species.iter().map(|s| s.name.clone()).collect();
@@ -1179,6 +1180,21 @@ fn choose_skin(
         ));
     }
     if let Some(skin) = scene.run.skin {
+        let least = crate::limits::MIN_SKIN_FRACTION * reach;
+        if skin < least {
+            return Err(SceneError::invalid(
+                "run.skin",
+                format!(
+                    "{} is too thin: at least {} of the interaction reach {} (= {}), or every \
+                     move across the reach costs more than a thousand list rebuilds; leave it \
+                     out for the automatic skin",
+                    crate::limits::short(skin),
+                    crate::limits::short(crate::limits::MIN_SKIN_FRACTION),
+                    crate::limits::short(reach),
+                    crate::limits::short(least)
+                ),
+            ));
+        }
         if skin > fit {
             return Err(SceneError::invalid(
                 "run.skin",

@@ -64,6 +64,9 @@ pub enum SimError {
     /// An event time came out NaN (non-finite positions or velocities).
     #[error("an event time of body {0} is not a number: its state is not finite")]
     NanTime(u32),
+    /// An output reached its size limit (`output.max_bytes`).
+    #[error("{0}")]
+    OutputLimit(String),
     /// Nothing will ever happen again (every body at rest), but the run asks for more events.
     #[error(
         "no events are left (the bodies neither move nor meet), {0} events short of the run length"
@@ -238,6 +241,11 @@ pub trait Sampler {
     fn sample(&mut self, _view: &View<'_>) {}
     /// Writes a trajectory frame.
     fn frame(&mut self, _view: &View<'_>) {}
+    /// Why the outputs cannot grow any further (checked after each sample and frame: the
+    /// loop then stops with [`SimError::OutputLimit`]).
+    fn over_budget(&self) -> Option<String> {
+        None
+    }
 }
 
 /// A sampler that does nothing.
@@ -616,7 +624,11 @@ where
             self.now = t;
         }
         if p == self.system {
-            return Ok(self.system_event(sampler));
+            let done = self.system_event(sampler);
+            if let Some(problem) = sampler.over_budget() {
+                return Err(SimError::OutputLimit(problem));
+            }
+            return Ok(done);
         }
         // The next body's list is needed next step: start loading it now, while this event
         // runs (it usually stays the next).
