@@ -139,13 +139,22 @@ impl Every {
                 }
                 Every::Events(x as u64)
             }
-            Some(u) => Every::Seconds(
-                x * match u {
+            Some(u) => {
+                let seconds = x * match u {
                     's' => 1.0,
                     'm' => 60.0,
                     _ => 3600.0,
-                },
-            ),
+                };
+                // A checked conversion: the interval is compared with elapsed `Duration`s.
+                if Duration::try_from_secs_f64(seconds).is_err() {
+                    return Err(format!(
+                        "`{text}` is too long a wall-clock time: at most {}s (about {} years)",
+                        crate::limits::short(Duration::MAX.as_secs_f64()),
+                        crate::limits::short(Duration::MAX.as_secs_f64() / 31_557_600.0)
+                    ));
+                }
+                Every::Seconds(seconds)
+            }
         })
     }
 }
@@ -390,7 +399,11 @@ impl Saver {
         match self.every {
             None => false,
             Some(Every::Events(n)) => events.saturating_sub(self.events_at_last) >= n,
-            Some(Every::Seconds(s)) => self.last.elapsed() >= Duration::from_secs_f64(s),
+            // `parse` refuses what does not fit a `Duration`; a saved interval that does not
+            // (a corrupted checkpoint passes its CRC only by accident) never comes due.
+            Some(Every::Seconds(s)) => {
+                Duration::try_from_secs_f64(s).is_ok_and(|d| self.last.elapsed() >= d)
+            }
         }
     }
 
@@ -433,7 +446,9 @@ mod tests {
         assert_eq!(Every::parse("90s"), Ok(Every::Seconds(90.0)));
         assert_eq!(Every::parse("10m"), Ok(Every::Seconds(600.0)));
         assert_eq!(Every::parse("1.5h"), Ok(Every::Seconds(5400.0)));
-        for bad in ["", "m", "-5", "0", "1.5", "ten", "5d", "inf"] {
+        for bad in [
+            "", "m", "-5", "0", "1.5", "ten", "5d", "inf", "1e20s", "1e300h", "1e18m",
+        ] {
             assert!(Every::parse(bad).is_err(), "{bad}");
         }
     }
