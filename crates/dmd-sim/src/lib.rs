@@ -62,6 +62,7 @@ pub mod limits;
 pub mod model;
 pub mod neighbour;
 pub mod observable;
+pub mod outdir;
 pub mod output;
 pub mod pair_state;
 pub mod potential;
