@@ -5,6 +5,8 @@
 //! for. `dmd check SCENE.toml` only reads and checks the scene. `dmd run --checkpoint-every`
 //! saves `DIR/checkpoint.dmd` from time to time, and `dmd resume CHECKPOINT` continues such a
 //! run bit for bit; a scene with `[chains]` or `[sweep]` runs its jobs in parallel (issue 9).
+//! Every argument and the output folder are checked before the run (exit status 2); a folder
+//! holding another run's files needs `--force`.
 
 use std::io::IsTerminal;
 use std::path::PathBuf;
