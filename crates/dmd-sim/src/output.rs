@@ -341,12 +341,17 @@ mod tests {
             1.0 / 3.0,
             2.0f64.sqrt() * 1e-300,
             6.02214076e23,
-            -123456.789012345678,
+            -123456.78901234567,
             f64::MIN_POSITIVE,
             f64::MAX,
             0.0,
         ];
-        write_csv(&path, &["x"], &xs.iter().map(|&x| vec![x]).collect::<Vec<_>>()).unwrap();
+        write_csv(
+            &path,
+            &["x"],
+            &xs.iter().map(|&x| vec![x]).collect::<Vec<_>>(),
+        )
+        .unwrap();
         let text = std::fs::read_to_string(&path).unwrap();
         let back: Vec<f64> = text.lines().skip(1).map(|l| l.parse().unwrap()).collect();
         for (a, b) in xs.iter().zip(&back) {
