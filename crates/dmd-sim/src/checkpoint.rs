@@ -376,12 +376,14 @@ pub struct Saver {
 impl Saver {
     /// Saves into `dir/checkpoint.dmd` every `every` (nothing without an interval, a folder or
     /// the scene's source).
+    /// With a folder and the source but no interval it saves only when a signal stops the run
+    /// ([`crate::interrupt`]).
     pub fn new(every: Option<Every>, dir: Option<&Path>, source: Option<SceneSource>) -> Self {
-        let active = every.is_some() && dir.is_some() && source.is_some();
+        let can = dir.is_some() && source.is_some();
         Saver {
-            every: every.filter(|_| active),
-            path: dir.filter(|_| active).map(|d| d.join(FILE_NAME)),
-            source: source.filter(|_| active),
+            every: every.filter(|_| can),
+            path: dir.filter(|_| can).map(|d| d.join(FILE_NAME)),
+            source: source.filter(|_| can),
             events_at_last: 0,
             last: std::time::Instant::now(),
             written: 0,
@@ -389,9 +391,14 @@ impl Saver {
         }
     }
 
-    /// Whether checkpoints are written at all.
+    /// Whether checkpoints are written from time to time.
     pub fn active(&self) -> bool {
         self.every.is_some()
+    }
+
+    /// Whether a checkpoint can be written (a folder and the scene's source are known).
+    pub fn can_save(&self) -> bool {
+        self.path.is_some() && self.source.is_some()
     }
 
     /// Whether one is due after `events` events in all.

@@ -58,6 +58,7 @@ pub mod flexible;
 pub mod flexible_scene;
 pub mod hmc;
 pub mod init;
+pub mod interrupt;
 pub mod limits;
 pub mod model;
 pub mod neighbour;

@@ -210,3 +210,124 @@ fn a_series_that_outgrows_its_limit_stops_the_run() {
     );
     let _ = std::fs::remove_dir_all(d);
 }
+
+const LONG: &str = r#"version = 1
+[box]
+density = 0.5
+[[species]]
+name = "A"
+count = 108
+[[pair]]
+species = ["A", "A"]
+steps = [[1.0, inf], [1.5, -1.0]]
+[init]
+positions = "fcc"
+temperature = 1.5
+[run]
+events = 4e6
+[output]
+sample_interval = 0.5
+series = true
+msd = { max_lag = 5 }
+trajectory = { interval = 20 }
+"#;
+
+/// Starts `dmd run` on `scene` into `out`, waits until production has started (the trajectory
+/// is being written) and sends SIGTERM `signals` times.
+fn run_and_signal(scene: &Path, out: &Path, signals: usize) -> (Output, std::time::Duration) {
+    let child = Command::new(env!("CARGO_BIN_EXE_dmd"))
+        .args(["run", "--quiet"])
+        .arg(scene)
+        .arg("--out")
+        .arg(out)
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let partial = out.join("trajectory.xyz.partial");
+    let t0 = std::time::Instant::now();
+    while !partial.exists() && t0.elapsed().as_secs() < 60 {
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+    std::thread::sleep(std::time::Duration::from_millis(200));
+    let sent = std::time::Instant::now();
+    for _ in 0..signals {
+        let k = Command::new("kill")
+            .args(["-TERM", &child.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(k.success());
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let o = child.wait_with_output().unwrap();
+    (o, sent.elapsed())
+}
+
+#[test]
+fn a_signal_stops_the_run_with_a_checkpoint_that_resumes_bit_for_bit() {
+    let d = dir("signal");
+    let s = d.join("scene.toml");
+    let text = LONG.replace("events = 4e6\n", "events = 4e6\nrebase_events = 1e5\n");
+    std::fs::write(&s, &text).unwrap();
+    let stopped = d.join("stopped");
+    let (o, _) = run_and_signal(&s, &stopped, 1);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(130), "{err}");
+    let ck = stopped.join("checkpoint.dmd");
+    assert!(
+        err.starts_with(&format!(
+            "dmd: {}: stopped by a signal after saving {}",
+            s.display(),
+            ck.display()
+        )),
+        "{err}"
+    );
+    assert!(
+        err.contains(&format!("dmd resume {}", ck.display())),
+        "{err}"
+    );
+    assert!(!stopped.join("summary.json").exists());
+    let o = dmd(&["resume", "--quiet"], &[("", &ck)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let straight = d.join("straight");
+    let o = dmd(&["run", "--quiet"], &[("", &s), ("--out", &straight)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for f in ["series.csv", "msd.csv", "trajectory.xyz"] {
+        assert_eq!(
+            std::fs::read(stopped.join(f)).unwrap(),
+            std::fs::read(straight.join(f)).unwrap(),
+            "{f}"
+        );
+    }
+    let summary = |dir: &Path| -> serde_json::Value {
+        let mut v: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(dir.join("summary.json")).unwrap()).unwrap();
+        for k in [
+            "wall_seconds",
+            "cpu_seconds",
+            "events_per_second",
+            "events_per_cpu_second",
+            "pair_events_per_second",
+            "pair_events_per_cpu_second",
+        ] {
+            v.as_object_mut().unwrap().remove(k);
+        }
+        v
+    };
+    assert_eq!(summary(&stopped), summary(&straight));
+    let _ = std::fs::remove_dir_all(d);
+}
+
+#[test]
+fn a_second_signal_stops_the_run_at_once() {
+    // Re-basings 1e9 events apart: the first signal alone would wait for the end of the run.
+    let d = dir("signal-twice");
+    let s = d.join("scene.toml");
+    let text = LONG.replace("events = 4e6\n", "events = 1e8\nrebase_events = 1e9\n");
+    std::fs::write(&s, &text).unwrap();
+    let out = d.join("out");
+    let (o, took) = run_and_signal(&s, &out, 2);
+    assert_eq!(o.status.code(), Some(130), "{}", stderr(&o));
+    assert!(took.as_secs() < 10, "{took:?}");
+    assert!(!out.join("checkpoint.dmd").exists());
+    let _ = std::fs::remove_dir_all(d);
+}

@@ -324,6 +324,9 @@ fn main() -> ExitCode {
                 resume: None,
                 halt_after_checkpoint,
             };
+            if let Err(code) = install_signal_handlers() {
+                return code;
+            }
             let mut bar = Bar {
                 bar: None,
                 length: None,
@@ -490,6 +493,9 @@ fn resume(path: PathBuf, out: Option<PathBuf>, quiet: bool, every: Option<String
         resume: Some((path.clone(), c)),
         halt_after_checkpoint: false,
     };
+    if let Err(code) = install_signal_handlers() {
+        return code;
+    }
     let mut bar = Bar {
         bar: None,
         length: None,
@@ -518,11 +524,27 @@ fn resume(path: PathBuf, out: Option<PathBuf>, quiet: bool, every: Option<String
     }
 }
 
+/// SIGINT, SIGTERM and SIGHUP stop the run at its next re-basing with a checkpoint; a second
+/// signal ends it at once (`dmd_sim::interrupt`).
+fn install_signal_handlers() -> Result<(), ExitCode> {
+    dmd_sim::interrupt::install().map_err(|e| {
+        eprintln!("dmd: cannot install the signal handlers: {e}");
+        ExitCode::FAILURE
+    })
+}
+
 /// The exit status of a failed run: 2 for what was wrong before the run started (the scene, a
-/// checkpoint), 1 for a failure during the run (docs/USER-GUIDE.md, Running).
+/// checkpoint), 1 for a failure during the run, 130 for a run stopped by a signal
+/// (docs/USER-GUIDE.md, Running).
 fn exit_code(e: &dmd_sim::run::RunError) -> ExitCode {
     use dmd_sim::run::RunError;
     match e {
+        RunError::Interrupted { checkpoint } => {
+            if let Some(p) = checkpoint {
+                eprintln!("dmd: continue the run with: dmd resume {}", p.display());
+            }
+            ExitCode::from(dmd_sim::interrupt::EXIT_STATUS as u8)
+        }
         RunError::Scene(_) | RunError::Checkpoint(_) => ExitCode::from(2),
         RunError::Job { source, .. } => exit_code(source),
         _ => ExitCode::FAILURE,
