@@ -66,7 +66,7 @@ pub enum SimError {
     NanTime(u32),
     /// An output reached its size limit (`output.max_bytes`).
     #[error("{0}")]
-    OutputLimit(String),
+    OutputLimit(Box<str>),
     /// Nothing will ever happen again (every body at rest), but the run asks for more events.
     #[error(
         "no events are left (the bodies neither move nor meet), {0} events short of the run length"
@@ -624,11 +624,7 @@ where
             self.now = t;
         }
         if p == self.system {
-            let done = self.system_event(sampler);
-            if let Some(problem) = sampler.over_budget() {
-                return Err(SimError::OutputLimit(problem));
-            }
-            return Ok(done);
+            return self.system_event(sampler);
         }
         // The next body's list is needed next step: start loading it now, while this event
         // runs (it usually stays the next).
@@ -881,7 +877,8 @@ where
             .expect("system event times are not NaN");
     }
 
-    fn system_event(&mut self, sampler: &mut dyn Sampler) -> bool {
+    #[inline(never)]
+    fn system_event(&mut self, sampler: &mut dyn Sampler) -> Result<bool, SimError> {
         let t = self.now;
         // In a fixed order when several are due at once: the end comes last.
         let what = if self.thermostat.is_some() && self.next_thermostat <= t {
@@ -896,7 +893,7 @@ where
         match what {
             SystemEvent::End => {
                 self.now = self.end;
-                return true;
+                return Ok(true);
             }
             SystemEvent::Sample => {
                 self.flush_integrals();
@@ -918,7 +915,10 @@ where
             }
         }
         self.schedule_system();
-        false
+        if let Some(problem) = sampler.over_budget() {
+            return Err(SimError::OutputLimit(problem.into()));
+        }
+        Ok(false)
     }
 
     fn thermostat_collision(&mut self) {
