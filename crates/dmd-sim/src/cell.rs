@@ -9,11 +9,23 @@
 //!
 //! Cell coordinates are packed into one `u32` per body (10 bits per axis, at most 1023 cells
 //! along an axis; larger boxes simply get larger cells).
+//!
+//! The number of cells is also bounded by the number of bodies ([`max_cells`]: at most
+//! `max(27, 2N)`), so that memory follows N and not the box: a dilute box, or a tiny
+//! interaction reach, gets cells wider than the reach (always correct, as a cell only has to
+//! be at least the reach wide) instead of billions of empty ones.
 
 use glam::DVec3;
 
 /// Most cells along one axis (the packed coordinates have 10 bits each).
 pub const MAX_CELLS_PER_AXIS: u32 = 1023;
+
+/// Most cells for `n_bodies` bodies: `max(27, 2N)`. A dense fluid has far fewer (about one
+/// cell per 3–10 bodies), so the bound only binds in dilute boxes, where it keeps the grid at
+/// about two cells per body and so its memory proportional to N.
+pub fn max_cells(n_bodies: usize) -> u64 {
+    (2 * n_bodies as u64).max(27)
+}
 
 /// Packs cell coordinates into one `u32`.
 #[inline(always)]
@@ -48,20 +60,13 @@ pub struct CellGrid {
 }
 
 impl CellGrid {
-    /// A grid for a box of `lengths` with cells at least `reach` wide, for `n_bodies` bodies.
-    /// Returns the number of cells per axis that would be needed if it is below 3.
+    /// A grid for a box of `lengths` with cells at least `reach` wide, for `n_bodies` bodies
+    /// (at most [`max_cells`] cells).
     ///
     /// # Errors
     /// The axis (0, 1, 2) along which fewer than 3 cells fit.
     pub fn new(lengths: DVec3, reach: f64, n_bodies: usize) -> Result<Self, usize> {
-        let mut n = [0u32; 3];
-        for a in 0..3 {
-            let fit = (lengths[a] / reach).floor();
-            if fit.is_nan() || fit < 3.0 {
-                return Err(a);
-            }
-            n[a] = fit.min(f64::from(MAX_CELLS_PER_AXIS)) as u32;
-        }
+        let n = Self::dims_for(lengths, reach, n_bodies)?;
         let bounds = std::array::from_fn(|a| {
             let w = lengths[a] / f64::from(n[a]);
             let mut b: Vec<f64> = (0..n[a]).map(|k| f64::from(k) * w).collect();
@@ -80,6 +85,25 @@ impl CellGrid {
             slots: vec![u32::MAX; cells * cap],
             slot_of: vec![u32::MAX; n_bodies],
         })
+    }
+
+    /// The cells along each axis of the grid [`new`](Self::new) builds: as many as fit at
+    /// least `reach` wide, at most [`MAX_CELLS_PER_AXIS`] per axis and [`max_cells`] in all.
+    ///
+    /// # Errors
+    /// The axis (0, 1, 2) along which fewer than 3 cells fit.
+    pub fn dims_for(lengths: DVec3, reach: f64, n_bodies: usize) -> Result<[u32; 3], usize> {
+        let mut fit = [0.0; 3];
+        for a in 0..3 {
+            fit[a] = (lengths[a] / reach).floor();
+            if fit[a].is_nan() || fit[a] < 3.0 {
+                return Err(a);
+            }
+        }
+        Ok(
+            smd::capped_cell_dims(fit, 3, u64::from(MAX_CELLS_PER_AXIS), max_cells(n_bodies))
+                .map(|k| k as u32),
+        )
     }
 
     /// Cells along each axis.
@@ -258,8 +282,43 @@ mod tests {
             CellGrid::new(DVec3::new(10.0, 2.9, 10.0), 1.0, 10).unwrap_err(),
             1
         );
-        let g = CellGrid::new(DVec3::new(10.0, 3.0, 7.5), 1.0, 10).unwrap();
+        let g = CellGrid::new(DVec3::new(10.0, 3.0, 7.5), 1.0, 105).unwrap();
         assert_eq!(g.dims(), [10, 3, 7]);
+    }
+
+    #[test]
+    fn cells_are_bounded_by_the_number_of_bodies() {
+        // (The sizes are asked of `dims_for`, so that nothing large is allocated if the bound
+        // is ever lost.) 108 bodies at density 1e-9: a box of 4.8e3 per edge would hold 1023³
+        // cells, 27 GB of slots.
+        let l = (108.0f64 / 1e-9).cbrt();
+        assert_eq!(CellGrid::dims_for(DVec3::splat(l), 1.0, 108), Ok([6, 6, 6]));
+        // A tiny reach (hard spheres of diameter 1e-8 at density 0.5).
+        assert_eq!(
+            CellGrid::dims_for(DVec3::splat(6.0), 5e-8, 108),
+            Ok([6, 6, 6])
+        );
+        // At least 3 per axis, and 27 cells whatever N.
+        assert_eq!(
+            CellGrid::dims_for(DVec3::new(1e6, 3.5, 1e6), 1.0, 2),
+            Ok([3, 3, 3])
+        );
+        let [x, y, z] = CellGrid::dims_for(DVec3::new(1e6, 4.0, 2e6), 1.0, 1000).unwrap();
+        let cells = x * y * z;
+        assert!(
+            cells <= 2000 && cells > 1500 && y == 3 && z > x && x >= 3,
+            "{x} {y} {z}"
+        );
+        // A dense box is not touched: 4000 bodies at density 0.9 with cells 1.5 wide.
+        let l = (4000.0f64 / 0.9).cbrt();
+        let k = (l / 1.5).floor() as u32;
+        assert_eq!(
+            CellGrid::dims_for(DVec3::splat(l), 1.5, 4000),
+            Ok([k, k, k])
+        );
+        let g = CellGrid::new(DVec3::splat(l), 1.5, 4000).unwrap();
+        assert_eq!(g.dims(), [k, k, k]);
+        assert_eq!(g.n_cells(), (k * k * k) as usize);
     }
 
     #[test]
@@ -285,7 +344,7 @@ mod tests {
 
     #[test]
     fn neighbourhoods_are_27_distinct_cells_with_periodic_shifts() {
-        let g = CellGrid::new(DVec3::new(3.0, 4.0, 5.0), 1.0, 1).unwrap();
+        let g = CellGrid::new(DVec3::new(3.0, 4.0, 5.0), 1.0, 30).unwrap();
         let mut seen = Vec::new();
         g.for_each_neighbour_cell(pack([0, 3, 2]), |cell, shift| seen.push((cell, shift)));
         assert_eq!(seen.len(), 27);

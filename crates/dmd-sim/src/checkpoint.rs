@@ -139,13 +139,22 @@ impl Every {
                 }
                 Every::Events(x as u64)
             }
-            Some(u) => Every::Seconds(
-                x * match u {
+            Some(u) => {
+                let seconds = x * match u {
                     's' => 1.0,
                     'm' => 60.0,
                     _ => 3600.0,
-                },
-            ),
+                };
+                // A checked conversion: the interval is compared with elapsed `Duration`s.
+                if Duration::try_from_secs_f64(seconds).is_err() {
+                    return Err(format!(
+                        "`{text}` is too long a wall-clock time: at most {}s (about {} years)",
+                        crate::limits::short(Duration::MAX.as_secs_f64()),
+                        crate::limits::short(Duration::MAX.as_secs_f64() / 31_557_600.0)
+                    ));
+                }
+                Every::Seconds(seconds)
+            }
         })
     }
 }
@@ -369,12 +378,14 @@ pub struct Saver {
 impl Saver {
     /// Saves into `dir/checkpoint.dmd` every `every` (nothing without an interval, a folder or
     /// the scene's source).
+    /// With a folder and the source but no interval it saves only when a signal stops the run
+    /// ([`crate::interrupt`]).
     pub fn new(every: Option<Every>, dir: Option<&Path>, source: Option<SceneSource>) -> Self {
-        let active = every.is_some() && dir.is_some() && source.is_some();
+        let can = dir.is_some() && source.is_some();
         Saver {
-            every: every.filter(|_| active),
-            path: dir.filter(|_| active).map(|d| d.join(FILE_NAME)),
-            source: source.filter(|_| active),
+            every: every.filter(|_| can),
+            path: dir.filter(|_| can).map(|d| d.join(FILE_NAME)),
+            source: source.filter(|_| can),
             events_at_last: 0,
             last: std::time::Instant::now(),
             written: 0,
@@ -382,9 +393,14 @@ impl Saver {
         }
     }
 
-    /// Whether checkpoints are written at all.
+    /// Whether checkpoints are written from time to time.
     pub fn active(&self) -> bool {
         self.every.is_some()
+    }
+
+    /// Whether a checkpoint can be written (a folder and the scene's source are known).
+    pub fn can_save(&self) -> bool {
+        self.path.is_some() && self.source.is_some()
     }
 
     /// Whether one is due after `events` events in all.
@@ -392,7 +408,11 @@ impl Saver {
         match self.every {
             None => false,
             Some(Every::Events(n)) => events.saturating_sub(self.events_at_last) >= n,
-            Some(Every::Seconds(s)) => self.last.elapsed() >= Duration::from_secs_f64(s),
+            // `parse` refuses what does not fit a `Duration`; a saved interval that does not
+            // (a corrupted checkpoint passes its CRC only by accident) never comes due.
+            Some(Every::Seconds(s)) => {
+                Duration::try_from_secs_f64(s).is_ok_and(|d| self.last.elapsed() >= d)
+            }
         }
     }
 
@@ -435,7 +455,9 @@ mod tests {
         assert_eq!(Every::parse("90s"), Ok(Every::Seconds(90.0)));
         assert_eq!(Every::parse("10m"), Ok(Every::Seconds(600.0)));
         assert_eq!(Every::parse("1.5h"), Ok(Every::Seconds(5400.0)));
-        for bad in ["", "m", "-5", "0", "1.5", "ten", "5d", "inf"] {
+        for bad in [
+            "", "m", "-5", "0", "1.5", "ten", "5d", "inf", "1e20s", "1e300h", "1e18m",
+        ] {
             assert!(Every::parse(bad).is_err(), "{bad}");
         }
     }

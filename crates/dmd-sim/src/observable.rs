@@ -453,6 +453,12 @@ pub struct Observers {
     /// as 1). The count is the sample's index in `samples`, which checkpoints keep, so a
     /// resumed run evaluates at the same samples.
     pub smooth_every: u64,
+    /// `output.max_bytes`: the most the series and the trajectory may take, checked as they
+    /// grow ([`Sampler::over_budget`]); the estimates are those of
+    /// [`crate::limits::check_outputs`], so a run that passed that check never reaches it.
+    pub max_bytes: Option<u64>,
+    /// Estimated bytes of one trajectory frame (set at the first frame).
+    frame_bytes: f64,
 }
 
 impl Sampler for Observers {
@@ -480,6 +486,37 @@ impl Sampler for Observers {
     fn frame(&mut self, view: &View<'_>) {
         if let Some(t) = &mut self.trajectory {
             t.write_frame(view);
+            let rods = !view.axes.is_empty();
+            self.frame_bytes =
+                view.bodies.len() as f64 * crate::limits::trajectory_line_bytes(rods) + 200.0;
         }
+    }
+
+    fn over_budget(&self) -> Option<String> {
+        use crate::limits::{SERIES_ROW_BYTES, short};
+        let max = self.max_bytes? as f64;
+        let rows = self.series.as_ref().map_or(0, |s| s.rows.len()) as f64;
+        if rows * SERIES_ROW_BYTES > max {
+            return Some(format!(
+                "output.series: series.csv has reached {} rows (about {} bytes), the limit \
+                 output.max_bytes = {}: lengthen output.sample_interval, or raise \
+                 output.max_bytes",
+                short(rows),
+                short(rows * SERIES_ROW_BYTES),
+                short(max)
+            ));
+        }
+        let frames = self.trajectory.as_ref().map_or(0, |t| t.frames()) as f64;
+        if frames * self.frame_bytes > max {
+            return Some(format!(
+                "output.trajectory: trajectory.xyz has reached {} frames (about {} bytes), \
+                 the limit output.max_bytes = {}: lengthen output.trajectory.interval, or \
+                 raise output.max_bytes",
+                short(frames),
+                short(frames * self.frame_bytes),
+                short(max)
+            ));
+        }
+        None
     }
 }

@@ -58,6 +58,16 @@ pub enum RunError {
     /// Stopped after a checkpoint, as [`RunOptions::halt_after_checkpoint`] asked.
     #[error("halted after writing a checkpoint, as asked")]
     Halted,
+    /// Stopped by a signal ([`crate::interrupt`]) at a re-basing, after saving this checkpoint
+    /// (none where the state cannot be saved: site molecules).
+    #[error("stopped by a signal{}", match .checkpoint {
+        Some(p) => format!(" after saving {}", p.display()),
+        None => " (this run's state cannot be saved)".to_owned(),
+    })]
+    Interrupted {
+        /// The checkpoint written.
+        checkpoint: Option<std::path::PathBuf>,
+    },
     /// A job of an ensemble of chains or sweep points failed (issue 9).
     #[error("job {job}: {source}")]
     Job {
@@ -352,6 +362,8 @@ pub fn run_scene_with(
         settings.debug_check_events = 0;
     }
     let ctx = Context {
+        // Site molecules cannot be saved yet (checkpoints are refused for them below).
+        saveable: !matches!(plan, Plan::Sites(_) | Plan::Flexible(_)),
         scene,
         config: &config,
         velocities: &velocities,
@@ -491,6 +503,8 @@ fn terraced_model<P: potential::PairPotential>(
 }
 
 struct Context<'a> {
+    /// Whether the model's state can be saved in a checkpoint.
+    saveable: bool,
     scene: &'a Scene,
     config: &'a Configuration,
     velocities: &'a [DVec3],
@@ -548,7 +562,7 @@ impl Context<'_> {
             .map(|(_, c)| c.source.clone())
             .or_else(|| self.options.source.clone());
         let mut run = Driver {
-            saver: Saver::new(every, self.out, source),
+            saver: Saver::new(every, self.out.filter(|_| self.saveable), source),
             record: resume.map(|(_, c)| c.record.clone()).unwrap_or_default(),
             chain: resume.and_then(|(_, c)| c.chain.clone()).or_else(|| {
                 scene
@@ -560,7 +574,9 @@ impl Context<'_> {
             events: 0,
             halt: self.options.halt_after_checkpoint,
         };
-        sim.set_pause_at_rebase(run.saver.active() && scene.hmc.is_none());
+        // With signal handlers installed every re-basing is a chance to stop (saved exactly).
+        let interruptible = crate::interrupt::installed() && run.saver.can_save();
+        sim.set_pause_at_rebase((run.saver.active() || interruptible) && scene.hmc.is_none());
 
         // Equilibration.
         let andersen = (scene.thermostat.kind == ThermostatKind::Andersen).then(|| Andersen {
@@ -658,6 +674,7 @@ impl Context<'_> {
             observers.smooth = self.smooth.take();
             observers.smooth_every = o.smooth_every.unwrap_or(crate::scene::DEFAULT_SMOOTH_EVERY);
         }
+        observers.max_bytes = Some(crate::limits::max_bytes(scene));
         let out = self.out;
         if let (Some(_), Some(dir)) = (&o.trajectory, out) {
             let names = scene.species.iter().map(|s| s.name.clone()).collect();
@@ -1020,8 +1037,12 @@ impl Driver {
         stage: Stage,
         observers: &mut Observers,
     ) -> Result<(), RunError> {
-        if !self.saver.due(self.events) {
+        let interrupted = crate::interrupt::requested();
+        if !interrupted && !self.saver.due(self.events) {
             return Ok(());
+        }
+        if interrupted && !self.saver.can_save() {
+            return Err(RunError::Interrupted { checkpoint: None });
         }
         let mut record = self.record.clone();
         if let Some((wall, cpu0)) = self.started {
@@ -1055,6 +1076,11 @@ impl Driver {
         })?;
         if self.halt {
             return Err(RunError::Halted);
+        }
+        if interrupted {
+            return Err(RunError::Interrupted {
+                checkpoint: self.saver.path.clone(),
+            });
         }
         Ok(())
     }
@@ -1244,6 +1270,21 @@ fn choose_skin(
         ));
     }
     if let Some(skin) = scene.run.skin {
+        let least = crate::limits::MIN_SKIN_FRACTION * reach;
+        if skin < least {
+            return Err(SceneError::invalid(
+                "run.skin",
+                format!(
+                    "{} is too thin: at least {} of the interaction reach {} (= {}), or every \
+                     move across the reach costs more than a thousand list rebuilds; leave it \
+                     out for the automatic skin",
+                    crate::limits::short(skin),
+                    crate::limits::short(crate::limits::MIN_SKIN_FRACTION),
+                    crate::limits::short(reach),
+                    crate::limits::short(least)
+                ),
+            ));
+        }
         if skin > fit {
             return Err(SceneError::invalid(
                 "run.skin",

@@ -758,6 +758,10 @@ pub struct OutputSpec {
     /// Samples between two evaluations of the smooth estimators (default
     /// [`DEFAULT_SMOOTH_EVERY`]): each costs a sum over every pair within the cut-off.
     pub smooth_every: Option<u64>,
+    /// The most bytes any one output may take in memory or on disk (default
+    /// [`crate::limits::DEFAULT_MAX_BYTES`]); see [`crate::limits`].
+    #[serde(default, deserialize_with = "opt_count")]
+    pub max_bytes: Option<u64>,
 }
 
 /// Default of `output.smooth_every` (as `output.rdf.every`): at every 20th sample the
@@ -782,6 +786,7 @@ impl Default for OutputSpec {
             plots: true,
             smooth_estimators: None,
             smooth_every: None,
+            max_bytes: None,
         }
     }
 }
@@ -1257,6 +1262,13 @@ impl Scene {
         if let Some(tr) = &o.trajectory {
             positive("output.trajectory.interval", tr.interval)?;
         }
+        if o.max_bytes == Some(0) {
+            return Err(SceneError::invalid(
+                "output.max_bytes",
+                "must be at least 1",
+            ));
+        }
+        crate::limits::check(self)?;
         crate::smd_engine::check(self)?;
         self.check_issue_9()
     }
@@ -1845,6 +1857,17 @@ pub(crate) fn check_steps_at(key: &str, steps: &[[f64; 2]]) -> Result<(), SceneE
             return Err(SceneError::invalid(
                 here,
                 "the energy step is 0, which changes nothing: remove the step",
+            ));
+        }
+        if dv.is_finite() && dv.abs() > crate::limits::MAX_STEP_ENERGY {
+            return Err(SceneError::invalid(
+                here,
+                format!(
+                    "the energy step {} is beyond any physical energy (at most {} in \
+                     magnitude, so that sums of energies stay finite); a hard core is inf",
+                    crate::limits::short(dv),
+                    crate::limits::short(crate::limits::MAX_STEP_ENERGY)
+                ),
             ));
         }
         if dv == f64::INFINITY && s > 0 {

@@ -64,6 +64,9 @@ pub enum SimError {
     /// An event time came out NaN (non-finite positions or velocities).
     #[error("an event time of body {0} is not a number: its state is not finite")]
     NanTime(u32),
+    /// An output reached its size limit (`output.max_bytes`).
+    #[error("{0}")]
+    OutputLimit(Box<str>),
     /// Nothing will ever happen again (every body at rest), but the run asks for more events.
     #[error(
         "no events are left (the bodies neither move nor meet), {0} events short of the run length"
@@ -240,6 +243,11 @@ pub trait Sampler {
     fn sample(&mut self, _view: &View<'_>) {}
     /// Writes a trajectory frame.
     fn frame(&mut self, _view: &View<'_>) {}
+    /// Why the outputs cannot grow any further (checked after each sample and frame: the
+    /// loop then stops with [`SimError::OutputLimit`]).
+    fn over_budget(&self) -> Option<String> {
+        None
+    }
 }
 
 /// A sampler that does nothing.
@@ -618,7 +626,7 @@ where
             self.now = t;
         }
         if p == self.system {
-            return Ok(self.system_event(sampler));
+            return self.system_event(sampler);
         }
         // The next body's list is needed next step: start loading it now, while this event
         // runs (it usually stays the next).
@@ -871,7 +879,8 @@ where
             .expect("system event times are not NaN");
     }
 
-    fn system_event(&mut self, sampler: &mut dyn Sampler) -> bool {
+    #[inline(never)]
+    fn system_event(&mut self, sampler: &mut dyn Sampler) -> Result<bool, SimError> {
         let t = self.now;
         // In a fixed order when several are due at once: the end comes last.
         let what = if self.thermostat.is_some() && self.next_thermostat <= t {
@@ -886,7 +895,7 @@ where
         match what {
             SystemEvent::End => {
                 self.now = self.end;
-                return true;
+                return Ok(true);
             }
             SystemEvent::Sample => {
                 self.flush_integrals();
@@ -908,7 +917,10 @@ where
             }
         }
         self.schedule_system();
-        false
+        if let Some(problem) = sampler.over_budget() {
+            return Err(SimError::OutputLimit(problem.into()));
+        }
+        Ok(false)
     }
 
     fn thermostat_collision(&mut self) {

@@ -1,6 +1,8 @@
 //! The corpus of bad scenes: every file in `tests/bad-scenes/` starts with
-//! `# expect: MESSAGE`, the exact first line of the error `dmd` must give for it. Also checks
-//! that an override (`--set`) gets the same message as the same mistake in a file.
+//! `# expect: MESSAGE`, the exact first line of the error `dmd` must give for it, and every one
+//! is bad input found before the run: `dmd run` refuses it with exit status 2 and that message
+//! (after `dmd: FILE: `). Also checks that an override (`--set`) gets the same message as the
+//! same mistake in a file.
 
 use std::path::{Path, PathBuf};
 
@@ -64,6 +66,41 @@ fn every_bad_scene_gets_its_exact_message() {
             )),
         }
     }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// The command gives every scene of the corpus exit status 2 (a bad scene, docs/USER-GUIDE.md)
+/// and the same first line, whether the scene fails when it is read or when it is set up.
+#[test]
+fn the_command_refuses_every_bad_scene_with_exit_status_2() {
+    let out = std::env::temp_dir().join(format!("dmd-bad-scenes-{}", std::process::id()));
+    let mut failures = Vec::new();
+    for path in &corpus() {
+        let text = std::fs::read_to_string(path).unwrap();
+        let expected = text
+            .lines()
+            .next()
+            .unwrap()
+            .trim_start_matches("# expect: ");
+        let _ = std::fs::remove_dir_all(&out);
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_dmd"))
+            .args(["run", "--quiet", "--out"])
+            .arg(&out)
+            .arg(path)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        let first = err.lines().next().unwrap_or("");
+        let want = format!("dmd: {}: {expected}", path.display());
+        if o.status.code() != Some(2) || first != want {
+            failures.push(format!(
+                "{}: exit {:?}\n  expected: {want}\n  got:      {first}",
+                path.file_name().unwrap().to_string_lossy(),
+                o.status.code()
+            ));
+        }
+    }
+    let _ = std::fs::remove_dir_all(&out);
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 

@@ -58,6 +58,7 @@ pub mod units;
 pub use body::BodyModel;
 pub use error::SmdError;
 pub use integrator::{DEFAULT_GUARD, Energy, Integrator, Observer, RunStats, Settings, Snapshot};
+pub use neighbour::capped_cell_dims;
 pub use system::{Lattice, MAX_BODIES, Orientations, Setup, System};
 
 /// The README's example, compiled and run as a doctest so it cannot go stale.

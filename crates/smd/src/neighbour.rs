@@ -142,9 +142,12 @@ impl NeighbourList {
         self.entries.clear();
         // Cells half a list radius wide: a stencil of 5³ of them spans 125/8 cubed list radii,
         // against 27 for cells one radius wide (42 % fewer candidates), and five fit along
-        // every axis whenever three radius-wide cells would. Smaller boxes: all pairs.
-        let dims: [usize; 3] = std::array::from_fn(|a| (2.0 * l[a] / self.radius) as usize);
-        if dims.iter().all(|&d| d >= 5) {
+        // every axis whenever three radius-wide cells would. Smaller boxes: all pairs. At most
+        // max(125, 2N) cells (wider ones in a dilute box).
+        let fit: [f64; 3] = std::array::from_fn(|a| (2.0 * l[a] / self.radius).floor());
+        if fit.iter().all(|&d| d >= 5.0) {
+            let dims =
+                capped_cell_dims(fit, 5, u64::MAX, (2 * n as u64).max(125)).map(|d| d as usize);
             self.build_cells(&sys.pos, l, dims, 2);
         } else {
             self.build_all_pairs(&sys.pos, l);
@@ -298,9 +301,65 @@ fn wrap(c: i32, dim: usize) -> (usize, i32) {
     }
 }
 
+/// Cells along each axis of a grid whose cells must be at least as wide as one `fit[a]`-th of
+/// each box edge (`fit[a]` ≥ `min`): at least `min` and at most `max_per_axis` per axis, and at
+/// most `max_total` (≥ `min`³) in all. The grids of both engines bound `max_total` by the
+/// number of bodies, so that their memory follows N and not the box: a dilute box or a tiny
+/// interaction range gets cells wider than needed (always correct for a neighbour search)
+/// instead of billions of empty ones. When the bound binds, the axes shrink in proportion
+/// (cells stay as near their shape as the minimum allows), computed in logarithms so that any
+/// finite `fit` works.
+pub fn capped_cell_dims(fit: [f64; 3], min: u64, max_per_axis: u64, max_total: u64) -> [u64; 3] {
+    let lo = (min as f64).ln();
+    let budget = (max_total.max(min * min * min) as f64).ln();
+    let mut d: [f64; 3] = fit.map(|f| f.max(min as f64).ln());
+    // Shrink the axes above the minimum together; an axis that reaches it stays there.
+    for _ in 0..3 {
+        let excess = d.iter().sum::<f64>() - budget;
+        if excess <= 0.0 {
+            break;
+        }
+        let free = d.iter().filter(|&&x| x > lo).count();
+        for x in &mut d {
+            if *x > lo {
+                *x = (*x - excess / free as f64).max(lo);
+            }
+        }
+    }
+    let mut n: [u64; 3] = d.map(|x| ((x.exp() + 1e-9).floor() as u64).clamp(min, max_per_axis));
+    // Round-off in the logarithms: lose cells along the longest axis until the grid fits.
+    while n[0].saturating_mul(n[1]).saturating_mul(n[2]) > max_total.max(min * min * min) {
+        let a = (0..3).max_by_key(|&a| n[a]).expect("three axes");
+        n[a] -= 1;
+    }
+    n
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn cell_grids_are_bounded_by_the_number_of_bodies() {
+        // 108 bodies at density 1e-9 with a list radius of 1.3: 10⁴ cells per axis unbounded.
+        let fit = [(108.0f64 / 1e-9).cbrt() / 1.3; 3];
+        assert_eq!(capped_cell_dims(fit, 3, 1023, 216), [6, 6, 6]);
+        assert_eq!(capped_cell_dims(fit, 5, u64::MAX, 216), [6, 6, 6]);
+        assert_eq!(capped_cell_dims(fit, 5, u64::MAX, 200), [5, 5, 5]);
+        // Proportions kept; the thin axis stays at its minimum.
+        let d = capped_cell_dims([1e6, 4.0, 2e6], 3, 1023, 2000);
+        assert!(
+            d[1] == 3 && d[2] > d[0] && d.iter().product::<u64>() > 1500,
+            "{d:?}"
+        );
+        assert!(d.iter().product::<u64>() <= 2000, "{d:?}");
+        // Absurd fits work, and a grid within the bound is untouched.
+        assert_eq!(capped_cell_dims([1e300; 3], 3, 1023, 27), [3, 3, 3]);
+        assert_eq!(
+            capped_cell_dims([12.0, 7.0, 9.0], 5, u64::MAX, 2000),
+            [12, 7, 9]
+        );
+    }
     use crate::{BodyModel, Setup};
 
     /// Every pair closer than the radius (minimum image, brute force) is in the list exactly

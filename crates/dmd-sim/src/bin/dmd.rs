@@ -5,6 +5,8 @@
 //! for. `dmd check SCENE.toml` only reads and checks the scene. `dmd run --checkpoint-every`
 //! saves `DIR/checkpoint.dmd` from time to time, and `dmd resume CHECKPOINT` continues such a
 //! run bit for bit; a scene with `[chains]` or `[sweep]` runs its jobs in parallel (issue 9).
+//! Every argument and the output folder are checked before the run (exit status 2); a folder
+//! holding another run's files needs `--force`.
 
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -56,6 +58,10 @@ enum Command {
         /// Results do not depend on it.
         #[arg(long)]
         threads: Option<usize>,
+        /// Replace the files of a previous run in the output folder (only files dmd writes
+        /// are removed); without it such a folder is refused.
+        #[arg(long)]
+        force: bool,
         /// Stop right after the first checkpoint, as a crash would (tests of `dmd resume`).
         #[arg(long, hide = true)]
         halt_after_checkpoint: bool,
@@ -256,6 +262,7 @@ fn main() -> ExitCode {
             quiet,
             checkpoint_every,
             threads,
+            force,
             halt_after_checkpoint,
         } => {
             // The flag is the last override, so it wins over the scene's key.
@@ -267,14 +274,12 @@ fn main() -> ExitCode {
                     return ExitCode::from(2);
                 }
             };
-            if s.engine == Engine::Smd {
-                return run_smd(&scene, &s, &base, &out, checkpoint_every.is_some(), quiet);
-            }
-            if s.smd.is_some() && !quiet {
-                println!(
-                    "dmd: note: the event-driven engine uses only [smd] smoothing (for the smooth \
-                     estimators)"
+            if s.engine == Engine::Smd && checkpoint_every.is_some() {
+                eprintln!(
+                    "dmd: {}: --checkpoint-every is not available with engine = \"smd\"",
+                    scene.display()
                 );
+                return ExitCode::from(2);
             }
             let every = match checkpoint_every.as_deref().map(Every::parse).transpose() {
                 Ok(e) => e,
@@ -283,6 +288,31 @@ fn main() -> ExitCode {
                     return ExitCode::from(2);
                 }
             };
+            // Every argument is checked; the folder is made ready before any work is done.
+            match dmd_sim::outdir::prepare(&out, force) {
+                Ok(removed) => {
+                    if !removed.is_empty() && !quiet {
+                        println!(
+                            "dmd: removed {} file(s) of a previous run from {}",
+                            removed.len(),
+                            out.display()
+                        );
+                    }
+                }
+                Err(e) => {
+                    eprintln!("dmd: {e}");
+                    return ExitCode::from(2);
+                }
+            }
+            if s.engine == Engine::Smd {
+                return run_smd(&scene, &s, &base, &out, quiet);
+            }
+            if s.smd.is_some() && !quiet {
+                println!(
+                    "dmd: note: the event-driven engine uses only [smd] smoothing (for the smooth \
+                     estimators)"
+                );
+            }
             let source = SceneSource {
                 text: std::fs::read_to_string(&scene).unwrap_or_default(),
                 overrides: set,
@@ -298,6 +328,9 @@ fn main() -> ExitCode {
                 resume: None,
                 halt_after_checkpoint,
             };
+            if let Err(code) = install_signal_handlers() {
+                return code;
+            }
             let mut bar = Bar {
                 bar: None,
                 length: None,
@@ -308,15 +341,10 @@ fn main() -> ExitCode {
                 run_scene_with(&s, &base, Some(&out), &mut bar, &options)
             };
             match result {
-                Ok(summary) => {
-                    if !quiet {
-                        print_summary(&summary, &out);
-                    }
-                    ExitCode::SUCCESS
-                }
+                Ok(summary) => finished(&summary, &out, quiet),
                 Err(e) => {
                     eprintln!("dmd: {}: {e}", scene.display());
-                    ExitCode::FAILURE
+                    exit_code(&e)
                 }
             }
         }
@@ -342,16 +370,8 @@ fn run_smd(
     s: &Scene,
     base: &std::path::Path,
     out: &std::path::Path,
-    checkpoints: bool,
     quiet: bool,
 ) -> ExitCode {
-    if checkpoints {
-        eprintln!(
-            "dmd: {}: --checkpoint-every is not available with engine = \"smd\"",
-            scene.display()
-        );
-        return ExitCode::from(2);
-    }
     let mut bar = Bar {
         bar: None,
         length: None,
@@ -499,6 +519,10 @@ fn resume(path: PathBuf, out: Option<PathBuf>, quiet: bool, every: Option<String
             .filter(|p| !p.as_os_str().is_empty())
             .unwrap_or_else(|| PathBuf::from("."))
     });
+    if let Err(e) = dmd_sim::outdir::check_writable(&out) {
+        eprintln!("dmd: {e}");
+        return ExitCode::from(2);
+    }
     let base = c.source.base.clone();
     let options = RunOptions {
         checkpoint_every: every,
@@ -506,6 +530,9 @@ fn resume(path: PathBuf, out: Option<PathBuf>, quiet: bool, every: Option<String
         resume: Some((path.clone(), c)),
         halt_after_checkpoint: false,
     };
+    if let Err(code) = install_signal_handlers() {
+        return code;
+    }
     let mut bar = Bar {
         bar: None,
         length: None,
@@ -522,21 +549,78 @@ fn resume(path: PathBuf, out: Option<PathBuf>, quiet: bool, every: Option<String
         run_scene_with(&scene, &base, Some(&out), &mut bar, &options)
     };
     match result {
-        Ok(summary) => {
-            if !quiet {
-                print_summary(&summary, &out);
-            }
-            ExitCode::SUCCESS
-        }
+        Ok(summary) => finished(&summary, &out, quiet),
         Err(e @ dmd_sim::run::RunError::Checkpoint(_)) => {
             eprintln!("dmd: {e}");
             ExitCode::from(2)
         }
         Err(e) => {
             eprintln!("dmd: {}: {e}", path.display());
-            ExitCode::FAILURE
+            exit_code(&e)
         }
     }
+}
+
+/// SIGINT, SIGTERM and SIGHUP stop the run at its next re-basing with a checkpoint; a second
+/// signal ends it at once (`dmd_sim::interrupt`).
+fn install_signal_handlers() -> Result<(), ExitCode> {
+    dmd_sim::interrupt::install().map_err(|e| {
+        eprintln!("dmd: cannot install the signal handlers: {e}");
+        ExitCode::FAILURE
+    })
+}
+
+/// The exit status of a failed run: 2 for what was wrong before the run started (the scene, a
+/// checkpoint), 1 for a failure during the run, 130 for a run stopped by a signal
+/// (docs/USER-GUIDE.md, Running).
+fn exit_code(e: &dmd_sim::run::RunError) -> ExitCode {
+    use dmd_sim::run::RunError;
+    match e {
+        RunError::Interrupted { checkpoint } => {
+            if let Some(p) = checkpoint {
+                eprintln!("dmd: continue the run with: dmd resume {}", p.display());
+            }
+            ExitCode::from(dmd_sim::interrupt::EXIT_STATUS as u8)
+        }
+        RunError::Scene(_) | RunError::Checkpoint(_) => ExitCode::from(2),
+        RunError::Job { source, .. } => exit_code(source),
+        _ => ExitCode::FAILURE,
+    }
+}
+
+/// The end of a run that completed: the summary on the terminal, and exit status 1 if the
+/// state became non-finite (its outputs are written, for the post-mortem), 0 otherwise.
+fn finished(s: &Summary, out: &std::path::Path, quiet: bool) -> ExitCode {
+    if !quiet {
+        print_summary(s, out);
+    }
+    let energies = [
+        ("energy_kinetic", s.energy_kinetic),
+        ("energy_potential", s.energy_potential),
+        ("energy_total_start", s.energy_total_start),
+        ("energy_total_end", s.energy_total_end),
+    ];
+    if let Some((name, x)) = energies.iter().find(|(_, x)| !x.is_finite()) {
+        eprintln!(
+            "dmd: the run ended in a non-finite state: {name} = {x} (see {}/summary.json)",
+            out.display()
+        );
+        return ExitCode::FAILURE;
+    }
+    if s.anomalies > 0 {
+        eprintln!(
+            "dmd: warning: {} anomalies (things that should not happen: {}); see anomalies in \
+             docs/USER-GUIDE.md",
+            s.anomalies,
+            s.anomalies_by_kind
+                .iter()
+                .filter(|(_, n)| **n > 0)
+                .map(|(k, n)| format!("{k} {n}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
+    ExitCode::SUCCESS
 }
 
 /// `dmd resume DIR` of chains or a sweep.

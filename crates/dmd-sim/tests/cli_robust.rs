@@ -1,0 +1,333 @@
+//! The `dmd` command against a hostile but fair user ("Nothing lost, nothing crashes"): bad
+//! command-line values and output folders are refused before the run with exit status 2, an
+//! output that outgrows its limit during a run stops it with exit status 1, and a new run never
+//! mixes its files with another run's.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+const SCENE: &str = r#"version = 1
+[box]
+density = 0.5
+[[species]]
+name = "A"
+count = 108
+[[pair]]
+species = ["A", "A"]
+steps = [[1.0, inf]]
+[init]
+positions = "fcc"
+temperature = 1.0
+[run]
+events = 10000
+"#;
+
+fn dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("dmd-cli-robust-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn scene(d: &Path, extra: &str) -> PathBuf {
+    let path = d.join("scene.toml");
+    std::fs::write(&path, format!("{SCENE}{extra}")).unwrap();
+    path
+}
+
+fn dmd(args: &[&str], paths: &[(&str, &Path)]) -> Output {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_dmd"));
+    c.args(args);
+    for (flag, p) in paths {
+        if !flag.is_empty() {
+            c.arg(flag);
+        }
+        c.arg(p);
+    }
+    c.output().unwrap()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+#[test]
+fn a_checkpoint_interval_beyond_a_duration_is_refused() {
+    let d = dir("every");
+    let s = scene(&d, "rebase_events = 1000\n");
+    let out = d.join("out");
+    // Before the fix this ran and panicked at the first re-basing (exit 101).
+    for every in ["1e20s", "1e300h"] {
+        let o = dmd(
+            &["run", "--quiet", "--checkpoint-every", every],
+            &[("", &s), ("--out", &out)],
+        );
+        assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+        assert!(
+            stderr(&o).starts_with(&format!(
+                "dmd: --checkpoint-every: `{every}` is too long a wall-clock time: at most 1.84e19s"
+            )),
+            "{}",
+            stderr(&o)
+        );
+        assert!(!out.join("summary.json").exists());
+    }
+    let o = dmd(
+        &["resume", "--quiet", "--checkpoint-every", "1e300h"],
+        &[("", &d.join("missing.dmd"))],
+    );
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).starts_with("dmd: --checkpoint-every: `1e300h` is too long"),
+        "{}",
+        stderr(&o)
+    );
+    let _ = std::fs::remove_dir_all(d);
+}
+
+#[test]
+fn an_unusable_output_folder_is_refused_before_the_run() {
+    let d = dir("unwritable");
+    let s = scene(&d, "");
+    // A file where the folder should be.
+    let file = d.join("a-file");
+    std::fs::write(&file, "mine").unwrap();
+    let o = dmd(&["run", "--quiet"], &[("", &s), ("--out", &file)]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert_eq!(
+        stderr(&o).trim(),
+        format!("dmd: --out {}: exists and is not a folder", file.display())
+    );
+    assert_eq!(std::fs::read_to_string(&file).unwrap(), "mine");
+    // A folder that cannot be created (inside that file): found before the run, not after it.
+    let inside = file.join("out");
+    let o = dmd(
+        &["run", "--quiet", "--set", "run.events=1e9"],
+        &[("", &s), ("--out", &inside)],
+    );
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).starts_with(&format!(
+            "dmd: --out {}: cannot create the folder:",
+            inside.display()
+        )),
+        "{}",
+        stderr(&o)
+    );
+    let _ = std::fs::remove_dir_all(d);
+}
+
+#[test]
+fn a_new_run_does_not_mix_its_files_with_another_runs() {
+    let d = dir("occupied");
+    let out = d.join("out");
+    let first = scene(
+        &d,
+        "[output]\nsample_interval = 0.1\nseries = true\ntrajectory = { interval = 0.5 }\n",
+    );
+    let o = dmd(
+        &[
+            "run",
+            "--quiet",
+            "--checkpoint-every",
+            "1000",
+            "--set",
+            "run.rebase_events=1000",
+        ],
+        &[("", &first), ("--out", &out)],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    for f in [
+        "summary.json",
+        "series.csv",
+        "trajectory.xyz",
+        "checkpoint.dmd",
+    ] {
+        assert!(out.join(f).exists(), "{f}");
+    }
+    std::fs::write(out.join("notes.txt"), "mine").unwrap();
+    let summary = std::fs::read(out.join("summary.json")).unwrap();
+    // A second run into the same folder is refused and changes nothing.
+    let second = scene(&d, "");
+    let o = dmd(&["run", "--quiet"], &[("", &second), ("--out", &out)]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).starts_with(&format!(
+            "dmd: --out {}: holds the files of another run (checkpoint.dmd, series-energy.svg, \
+             series-pressure.svg, series.csv, and 2 more): use --force to replace them, \
+             or `dmd resume` to continue that run",
+            out.display()
+        )),
+        "{}",
+        stderr(&o)
+    );
+    assert_eq!(std::fs::read(out.join("summary.json")).unwrap(), summary);
+    // With --force the old run's files go (only dmd's), then the new run writes its own.
+    let o = dmd(
+        &["run", "--quiet", "--force"],
+        &[("", &second), ("--out", &out)],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let mut left: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    left.sort();
+    assert_eq!(left, ["notes.txt", "summary.json"]);
+    // A stale temporary file of dmd is cleaned up at the start of a run (with --force here,
+    // as the folder holds the last run's summary).
+    std::fs::write(out.join("trajectory.xyz.partial"), "stale").unwrap();
+    let o = dmd(
+        &["run", "--quiet", "--force"],
+        &[("", &second), ("--out", &out)],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!out.join("trajectory.xyz.partial").exists());
+    assert!(out.join("notes.txt").exists());
+    let _ = std::fs::remove_dir_all(d);
+}
+
+#[test]
+fn a_series_that_outgrows_its_limit_stops_the_run() {
+    // A run given in events cannot be estimated beforehand: the series is stopped when it
+    // reaches output.max_bytes (exit status 1: a failure during the run).
+    let d = dir("series");
+    let s = scene(
+        &d,
+        "[output]\nsample_interval = 1e-6\nseries = true\nmax_bytes = 1e5\n",
+    );
+    let out = d.join("out");
+    let o = dmd(&["run", "--quiet"], &[("", &s), ("--out", &out)]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).starts_with(&format!(
+            "dmd: {}: output.series: series.csv has reached 667 rows (about 100050 bytes), the \
+             limit output.max_bytes = 100000",
+            s.display()
+        )),
+        "{}",
+        stderr(&o)
+    );
+    let _ = std::fs::remove_dir_all(d);
+}
+
+const LONG: &str = r#"version = 1
+[box]
+density = 0.5
+[[species]]
+name = "A"
+count = 108
+[[pair]]
+species = ["A", "A"]
+steps = [[1.0, inf], [1.5, -1.0]]
+[init]
+positions = "fcc"
+temperature = 1.5
+[run]
+events = 4e6
+[output]
+sample_interval = 0.5
+series = true
+msd = { max_lag = 5 }
+trajectory = { interval = 20 }
+"#;
+
+/// Starts `dmd run` on `scene` into `out`, waits until production has started (the trajectory
+/// is being written) and sends SIGTERM `signals` times.
+fn run_and_signal(scene: &Path, out: &Path, signals: usize) -> (Output, std::time::Duration) {
+    let child = Command::new(env!("CARGO_BIN_EXE_dmd"))
+        .args(["run", "--quiet"])
+        .arg(scene)
+        .arg("--out")
+        .arg(out)
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let partial = out.join("trajectory.xyz.partial");
+    let t0 = std::time::Instant::now();
+    while !partial.exists() && t0.elapsed().as_secs() < 60 {
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+    std::thread::sleep(std::time::Duration::from_millis(200));
+    let sent = std::time::Instant::now();
+    for _ in 0..signals {
+        let k = Command::new("kill")
+            .args(["-TERM", &child.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(k.success());
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let o = child.wait_with_output().unwrap();
+    (o, sent.elapsed())
+}
+
+#[test]
+fn a_signal_stops_the_run_with_a_checkpoint_that_resumes_bit_for_bit() {
+    let d = dir("signal");
+    let s = d.join("scene.toml");
+    let text = LONG.replace("events = 4e6\n", "events = 4e6\nrebase_events = 1e5\n");
+    std::fs::write(&s, &text).unwrap();
+    let stopped = d.join("stopped");
+    let (o, _) = run_and_signal(&s, &stopped, 1);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(130), "{err}");
+    let ck = stopped.join("checkpoint.dmd");
+    assert!(
+        err.starts_with(&format!(
+            "dmd: {}: stopped by a signal after saving {}",
+            s.display(),
+            ck.display()
+        )),
+        "{err}"
+    );
+    assert!(
+        err.contains(&format!("dmd resume {}", ck.display())),
+        "{err}"
+    );
+    assert!(!stopped.join("summary.json").exists());
+    let o = dmd(&["resume", "--quiet"], &[("", &ck)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let straight = d.join("straight");
+    let o = dmd(&["run", "--quiet"], &[("", &s), ("--out", &straight)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for f in ["series.csv", "msd.csv", "trajectory.xyz"] {
+        assert_eq!(
+            std::fs::read(stopped.join(f)).unwrap(),
+            std::fs::read(straight.join(f)).unwrap(),
+            "{f}"
+        );
+    }
+    let summary = |dir: &Path| -> serde_json::Value {
+        let mut v: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(dir.join("summary.json")).unwrap()).unwrap();
+        for k in [
+            "wall_seconds",
+            "cpu_seconds",
+            "events_per_second",
+            "events_per_cpu_second",
+            "pair_events_per_second",
+            "pair_events_per_cpu_second",
+        ] {
+            v.as_object_mut().unwrap().remove(k);
+        }
+        v
+    };
+    assert_eq!(summary(&stopped), summary(&straight));
+    let _ = std::fs::remove_dir_all(d);
+}
+
+#[test]
+fn a_second_signal_stops_the_run_at_once() {
+    // Re-basings 1e9 events apart: the first signal alone would wait for the end of the run.
+    let d = dir("signal-twice");
+    let s = d.join("scene.toml");
+    let text = LONG.replace("events = 4e6\n", "events = 1e8\nrebase_events = 1e9\n");
+    std::fs::write(&s, &text).unwrap();
+    let out = d.join("out");
+    let (o, took) = run_and_signal(&s, &out, 2);
+    assert_eq!(o.status.code(), Some(130), "{}", stderr(&o));
+    assert!(took.as_secs() < 10, "{took:?}");
+    assert!(!out.join("checkpoint.dmd").exists());
+    let _ = std::fs::remove_dir_all(d);
+}
