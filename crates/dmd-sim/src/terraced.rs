@@ -1584,6 +1584,7 @@ mod tests {
             reach: 2.0,
             up: 0.5,
             down: -0.5,
+            coordinate: [(f64::NAN, f64::NAN); 2],
         };
         // Positive inside, zero on either level, negative outside; slopes of ±U̇ at the levels.
         assert!(b.indicator(0.0, 1.0).0 > 0.0);

@@ -418,9 +418,12 @@ fn certified_prediction_misses_nothing_and_changes_no_event() {
         .map(|i| DVec3::new((i as f64).cos(), -1.0, 0.5) * (1.0 + (i % 5) as f64 * 8.0))
         .collect();
     let run = |horizon: f64, stop: Stop| {
+        // The scenes' default step limit by the speed of U (without it the adaptive search
+        // itself steps over fast excursions through a level, certified or not).
         let search = SearchSettings {
             verify_step: Some(0.0005),
             horizon,
+            max_change: 0.5,
             ..SearchSettings::paper(0.005)
         };
         let map = TerraceMap::evenly_spaced(&rod, 0.7, &TerraceOptions::default()).unwrap();
@@ -435,12 +438,13 @@ fn certified_prediction_misses_nothing_and_changes_no_event() {
         let st = sim.model().search_stats().unwrap();
         (st, sim.counters(), sim.positions())
     };
-    let (plain, _, _) = run(0.0, Stop::Time(3.0));
-    let (cert, _, _) = run(0.02, Stop::Time(3.0));
+    let (plain, _, _) = run(0.0, Stop::Time(1.5));
+    let (cert, _, _) = run(0.02, Stop::Time(1.5));
     assert_eq!(plain.taylor_models, 0);
+    assert_eq!(plain.verify_misses, 0, "{plain:?}");
     assert_eq!(cert.verify_misses, 0, "{cert:?}");
     assert_eq!(cert.off_terrace + cert.misfits, 0, "{cert:?}");
-    assert!(cert.certified_jumps > 10_000, "{cert:?}");
+    assert!(cert.certified_jumps > 5_000, "{cert:?}");
     assert!(
         cert.evaluations < plain.evaluations / 2,
         "evaluations: {} certified, {} plain",

@@ -69,31 +69,32 @@ impl FreeFlight {
         }
     }
 
-    /// The smallest centre distance over `[0, h]` (exact for straight-line motion).
+    /// The square of the smallest centre distance over `[0, h]` (exact for straight-line
+    /// motion).
     #[inline]
-    pub fn closest_approach(&self, h: f64) -> f64 {
+    pub fn closest_approach_squared(&self, h: f64) -> f64 {
         let v2 = self.v.length_squared();
         let tau = if v2 > 0.0 {
             (-self.r.dot(self.v) / v2).clamp(0.0, h)
         } else {
             0.0
         };
-        (self.r + self.v * tau).length()
+        (self.r + self.v * tau).length_squared()
     }
 
     /// `|r⃛|` bounded over `[0, h]`: along a straight line `r⃛ = −3 ṙ r̈ / r` with
     /// `r̈ = (|v|² − ṙ²)/r`, and `|ṙ|(|v|² − ṙ²) ≤ 2|v|³/(3√3)`, so `|r⃛| ≤ (2/√3)|v|³/r_lo²`.
     #[inline]
     pub fn distance_third_bound(&self, h: f64) -> f64 {
-        let r_lo = self.closest_approach(h);
-        let v = self.v.length();
-        if v == 0.0 {
+        let v2 = self.v.length_squared();
+        if v2 == 0.0 {
             return 0.0;
         }
-        if r_lo == 0.0 {
+        let r_lo2 = self.closest_approach_squared(h);
+        if r_lo2 == 0.0 {
             return f64::INFINITY;
         }
-        (2.0 / 3f64.sqrt()) * v * v * v / (r_lo * r_lo)
+        (2.0 / 3f64.sqrt()) * v2 * v2.sqrt() / r_lo2
     }
 
     /// `r`, `ṙ`, `r̈` at the window's start.
@@ -145,14 +146,16 @@ impl TaylorModel {
     /// which both stay below their distances is returned. The candidates are independent, a
     /// few multiplications each and no division: this runs for every pair after every event.
     pub fn safe_time(&self, a: f64, b: f64, h: f64) -> f64 {
-        if !(self.x.is_finite() && self.dx.is_finite() && self.ddx.is_finite()) || !(h > 0.0) {
+        let usable = self.x.is_finite() && self.dx.is_finite() && self.ddx.is_finite() && h > 0.0;
+        if !usable {
             return 0.0;
         }
         // Round-off of x and of the band's ends: a relative margin.
         let margin = 1e-8 * self.x.abs();
         let (room_up, room_down) = (b - self.x - margin, self.x - a - margin);
         let c3 = self.third / 6.0;
-        if !(room_up > 0.0 && room_down > 0.0 && c3 < f64::INFINITY) {
+        let room = room_up > 0.0 && room_down > 0.0 && c3 < f64::INFINITY;
+        if !room {
             return 0.0;
         }
         let (u1, u2) = (self.dx.max(0.0), (0.5 * self.ddx).max(0.0));

@@ -107,7 +107,9 @@ pub(crate) fn lj_reach(epsilon: f64, sigma: f64, level: f64) -> Result<f64, Pote
 /// around `x_m` when `lo` is below the minimum `−ε`, else up to two (one on each flank), whose
 /// ends are the levels' inner (`x < x_m`) and outer preimages, the roots of [`lj_reach`].
 pub(crate) fn lj_intervals(epsilon: f64, sigma: f64, lo: f64, hi: f64) -> Vec<(f64, f64)> {
-    if !(hi > -epsilon) || lo.is_nan() || !(lo < hi) {
+    // An empty band: below the minimum, or not an interval.
+    let band = hi > -epsilon && lo < hi;
+    if !band {
         return Vec::new();
     }
     let ratio = |u: f64| (u / epsilon).max(-1.0);
@@ -127,7 +129,8 @@ pub(crate) fn lj_intervals(epsilon: f64, sigma: f64, lo: f64, hi: f64) -> Vec<(f
             sigma * ((-0.25 * ratio(u)) / x_plus(u)).powf(-1.0 / 6.0)
         }
     };
-    if !(lo > -epsilon) {
+    let above_minimum = lo > -epsilon;
+    if !above_minimum {
         // The lowest terrace: the well's bottom lies inside the band.
         vec![(inner(hi), outer(hi))]
     } else if lo < 0.0 {

@@ -114,8 +114,13 @@ impl LinearRotor {
     }
 
     /// The unit axis at time `t`.
-    #[inline]
+    #[inline(always)]
     pub fn axis(&self, t: f64) -> DVec3 {
+        // At the rotor's own origin (a body that has just changed): no trigonometry. The same
+        // value as the general formula, `s₀·1 + v₀·0`.
+        if t == 0.0 {
+            return self.s0;
+        }
         let (s, c) = crate::trig::sin_cos(self.rate * t);
         self.s0 * c + self.v0 * s
     }
