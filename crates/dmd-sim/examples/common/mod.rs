@@ -139,12 +139,16 @@ pub(crate) fn matched_cost(pts: &[(f64, f64)], err: f64) -> (Bound, f64) {
 pub(crate) fn matched_ratio(smd: &[(f64, f64)], err: f64, floor: f64, dmd_cost: f64) -> String {
     let below = if err <= floor { " (unresolved)" } else { "" };
     let (bound, cost) = matched_cost(smd, err);
-    let mark = match bound {
+    format!("{}{:.2}{below}", bound_mark(bound), cost / dmd_cost)
+}
+
+/// `≤ ` or `≥ ` before a bound, nothing before an interpolated value.
+pub(crate) fn bound_mark(bound: Bound) -> &'static str {
+    match bound {
         Bound::About => "",
         Bound::AtMost => "≤ ",
         Bound::AtLeast => "≥ ",
-    };
-    format!("{mark}{:.2}{below}", cost / dmd_cost)
+    }
 }
 
 // ---- Plots ------------------------------------------------------------------------------------
