@@ -4,6 +4,8 @@
 //! - `validate [--quick] [--only NAME,..]`: slow physics and algorithm validation; each check
 //!   rewrites its own section of `docs/VALIDATION.md` (with `--quick`, a reduced run whose report
 //!   goes to `target/validate-quick/` so CI never edits tracked files).
+//! - `frontier [--quick]`: shorthand for `validate --only frontier [--quick]`, the error-against-cost
+//!   frontier of DMD and SMD on the paper's rods.
 //! - `bench [--only NAME,..]`: the criterion benchmarks of `benches/`.
 //!
 //! xtask depends on nothing but std and compiles in seconds: validations are release-built
@@ -24,6 +26,8 @@ commands:
   ci                         fmt --check, clippy -D warnings, the README test command, rustdoc -D warnings
   validate [--quick] [--only NAME[,NAME..]] [--list]
                              run validation checks; full runs rewrite docs/VALIDATION.md sections
+  frontier [--quick]         the same as `validate --only frontier [--quick]`: DMD against SMD,
+                             error against cost on the paper's rods
   bench [--only NAME[,NAME..]] [-- CRITERION ARGS]
                              run the criterion benchmarks in benches/
 ";
@@ -33,6 +37,7 @@ fn main() -> ExitCode {
     let result = match args.first().map(String::as_str) {
         Some("ci") => ci::run(&args[1..]),
         Some("validate") => validate::run(&args[1..]),
+        Some("frontier") => frontier(&args[1..]),
         Some("bench") => ci::bench(&args[1..]),
         Some("-h" | "--help" | "help") => {
             print!("{USAGE}");
@@ -48,6 +53,18 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// `cargo xtask frontier [--quick]`: the `frontier` validation alone.
+fn frontier(args: &[String]) -> Result<(), String> {
+    let mut forwarded = vec!["--only".to_owned(), "frontier".to_owned()];
+    for a in args {
+        match a.as_str() {
+            "--quick" => forwarded.push(a.clone()),
+            other => return Err(format!("`frontier` takes only `--quick`, got `{other}`")),
+        }
+    }
+    validate::run(&forwarded)
 }
 
 /// The workspace root (the parent of `xtask/`), whatever directory cargo was started from.

@@ -136,6 +136,14 @@ pub(crate) const CHECKS: &[Check] = &[
         quick: &["--quick"],
     },
     Check {
+        name: "frontier",
+        title: "The error-against-cost frontier: DMD at several ΔV and level rules against SMD at several time steps, dense fluid and gas",
+        package: "dmd-sim",
+        example: "validate_frontier",
+        full: &[],
+        quick: &["--quick"],
+    },
+    Check {
         name: "smd",
         title: "Standard MD reference: energy against time step and cost, reversibility, stability, Lennard-Jones against its equation of state",
         package: "dmd-smd",

@@ -18,16 +18,17 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use dmd_sim::output::{Curve, plot_svg};
-use dmd_sim::run::{Quiet, Summary, run_scene};
-use dmd_sim::scene::Scene;
+use dmd_sim::run::Summary;
 use potential::{LjRod, Smoothed};
 use rayon::prelude::*;
 use smd::observe::{Correlations, Estimate, Observables, Rdf, detrended_std};
 use smd::{BodyModel, Integrator, Lattice, Settings, Setup, System, units};
 
-const PAPER: &str = include_str!("../../../scenes/rods-paper.toml");
-/// T* = 1.4 with ε = 3 kJ/mol, in kelvin (the scene's `init.temperature`).
-const T_KELVIN: f64 = 505.144;
+mod common;
+use common::{
+    PAPER, Report, csv, gas_overrides, integrated_difference, kt_label, matched_ratio, plot_points,
+    scene_run,
+};
 /// Sampling interval of every correlation function, DMD and SMD alike (a multiple of every
 /// SMD step), so that the curves share their abscissae.
 const SAMPLE_FS: f64 = 3.6;
@@ -58,17 +59,6 @@ fn parse() -> Result<Args, String> {
         }
     }
     Ok(Args { quick, figures })
-}
-
-struct Report {
-    ok: bool,
-}
-
-impl Report {
-    fn check(&mut self, ok: bool) -> &'static str {
-        self.ok &= ok;
-        if ok { "pass" } else { "**FAIL**" }
-    }
 }
 
 fn main() -> ExitCode {
@@ -147,16 +137,6 @@ impl Engine {
     }
 }
 
-fn kt_label(dv: f64) -> String {
-    if dv == 1.0 {
-        "kT".to_owned()
-    } else if dv > 1.0 {
-        format!("{dv}kT")
-    } else {
-        format!("kT/{}", (1.0 / dv).round())
-    }
-}
-
 /// One production run with its observables.
 #[derive(Clone, Debug)]
 struct Production {
@@ -175,27 +155,6 @@ struct Production {
     fluctuation: Option<f64>,
     /// SMD: the equilibrated state, for the cost run.
     state: Option<System>,
-}
-
-fn csv(path: &Path) -> Vec<Vec<f64>> {
-    std::fs::read_to_string(path)
-        .unwrap_or_default()
-        .lines()
-        .skip(1)
-        .map(|l| {
-            l.split(',')
-                .map(|x| x.parse().unwrap_or(f64::NAN))
-                .collect()
-        })
-        .collect()
-}
-
-fn scene_run(text: &str, overrides: &[String], dir: Option<&Path>) -> Result<Summary, String> {
-    let scene = Scene::from_str_with(text, overrides).map_err(|e| e.to_string())?;
-    if let Some(d) = dir {
-        let _ = std::fs::remove_dir_all(d);
-    }
-    run_scene(&scene, Path::new("."), dir, &mut Quiet).map_err(|e| e.to_string())
 }
 
 fn dmd_production(
@@ -355,29 +314,6 @@ fn smd_cost(
     .map_err(|e| e.to_string())?;
     let stats = md.run(steps, steps, &mut ()).map_err(|e| e.to_string())?;
     Ok(stats.seconds() / units::to_ps(stats.simulated_time))
-}
-
-/// `∫ |f − g|` over the abscissae of `f` inside `g`'s range, `g` interpolated linearly
-/// (trapezoids on |f − g|).
-fn integrated_difference(f: &[(f64, f64)], g: &[(f64, f64)]) -> f64 {
-    let at = |x: f64| -> Option<f64> {
-        let k = g.partition_point(|p| p.0 < x);
-        if k < g.len() && (g[k].0 - x).abs() <= 1e-9 * (1.0 + x.abs()) {
-            return Some(g[k].1);
-        }
-        if k == 0 || k >= g.len() {
-            return None;
-        }
-        let (a, b) = (g[k - 1], g[k]);
-        Some(a.1 + (b.1 - a.1) * (x - a.0) / (b.0 - a.0))
-    };
-    let d: Vec<(f64, f64)> = f
-        .iter()
-        .filter_map(|&(x, y)| at(x).map(|z| (x, (y - z).abs())))
-        .collect();
-    d.windows(2)
-        .map(|w| 0.5 * (w[0].1 + w[1].1) * (w[1].0 - w[0].0))
-        .sum()
 }
 
 /// The three error numbers of `run` against `reference`.
@@ -777,7 +713,10 @@ fn dense(args: &Args, r: &mut Report, w: &mut String, work: &Path) -> Result<Den
         };
         let ratio = smd18.map_or("–".to_owned(), |c| format!("{:.2}", c / row.cost));
         let matched: Vec<String> = (0..3)
-            .map(|k| matched_ratio(&smd, k, row.err[k], floor[k], row.cost))
+            .map(|k| {
+                let pts: Vec<(f64, f64)> = smd.iter().map(|x| (x.cost, x.err[k])).collect();
+                matched_ratio(&pts, row.err[k], floor[k], row.cost)
+            })
             .collect();
         writeln!(
             w,
@@ -928,26 +867,6 @@ fn zero_terrace_energy(g: &[(f64, f64)], dv: f64) -> f64 {
     2.0 * std::f64::consts::PI * rho * sum
 }
 
-/// SMD's CPU time per ps at error `err` of observable `k`, over `dmd_cost`, as text.
-fn matched_ratio(smd: &[&Row], k: usize, err: f64, floor: f64, dmd_cost: f64) -> String {
-    // Cheapest first.
-    let mut pts: Vec<(f64, f64)> = smd.iter().map(|x| (x.cost, x.err[k])).collect();
-    pts.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let below = if err <= floor { " (unresolved)" } else { "" };
-    let Some(j) = pts.iter().position(|p| p.1 <= err) else {
-        let finest = pts.last().map_or(f64::NAN, |p| p.0);
-        return format!("≥ {:.2}{below}", finest / dmd_cost);
-    };
-    if j == 0 {
-        return format!("≤ {:.2}{below}", pts[0].0 / dmd_cost);
-    }
-    // The next cheaper run is less accurate: interpolate log–log between the two.
-    let (a, b) = (pts[j - 1], pts[j]);
-    let s = (err.ln() - a.1.ln()) / (b.1.ln() - a.1.ln());
-    let cost = (a.0.ln() + s * (b.0.ln() - a.0.ln())).exp();
-    format!("{:.2}{below}", cost / dmd_cost)
-}
-
 /// std(E)/std(U) and CPU s per ps of an SMD gas run, or the error of a run that blew up.
 type GasRun = Result<(f64, f64), String>;
 
@@ -975,20 +894,7 @@ fn gas(args: &Args, r: &mut Report, w: &mut String, dense: &Dense) -> Result<(),
         dense.fluctuation_18
     )
     .ok();
-    let tk = t_star / 1.4 * T_KELVIN;
-    let (dmd_cpu, events) = dmd_cost(
-        0.5,
-        dmd_eq,
-        dmd_ps,
-        &[
-            format!("init.temperature={tk}"),
-            // ρ* = 0.01: 0.01 / σ³ per Å³.
-            format!(
-                "box.density={}",
-                units::density_from_reduced(0.01, LjRod::paper().sigma())
-            ),
-        ],
-    )?;
+    let (dmd_cpu, events) = dmd_cost(0.5, dmd_eq, dmd_ps, &gas_overrides())?;
     let mut smd_rows: Vec<(f64, GasRun)> = Vec::new();
     for &dt in dts {
         let run = || -> Result<(f64, f64), String> {
@@ -1281,116 +1187,4 @@ fn lennard_jones(args: &Args, r: &mut Report, w: &mut String, work: &Path) -> Re
     )
     .ok();
     Ok(())
-}
-
-// ---- Plots ------------------------------------------------------------------------------------
-
-/// Log–log points joined by lines, with an optional dashed horizontal line at `floor`.
-fn plot_points(
-    path: &Path,
-    title: &str,
-    x_label: &str,
-    y_label: &str,
-    series: &[(String, Vec<(f64, f64)>)],
-    floor: Option<f64>,
-) -> Result<(), String> {
-    use plotters::prelude::*;
-    let colours = [
-        RGBColor(200, 30, 30),
-        RGBColor(30, 80, 200),
-        RGBColor(20, 150, 60),
-        RGBColor(170, 60, 170),
-    ];
-    let pts = || {
-        series
-            .iter()
-            .flat_map(|s| s.1.iter().copied())
-            .filter(|p| p.0 > 0.0 && p.1 > 0.0 && p.0.is_finite() && p.1.is_finite())
-    };
-    let (x0, x1) = pts().fold((f64::INFINITY, 0.0f64), |a, p| (a.0.min(p.0), a.1.max(p.0)));
-    let (mut y0, mut y1) = pts().fold((f64::INFINITY, 0.0f64), |a, p| (a.0.min(p.1), a.1.max(p.1)));
-    if let Some(f) = floor.filter(|f| *f > 0.0) {
-        y0 = y0.min(f);
-        y1 = y1.max(f);
-    }
-    if !x0.is_finite() || !y0.is_finite() {
-        return Err(format!("{}: nothing to plot", path.display()));
-    }
-    let root = SVGBackend::new(path, (760, 480)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| e.to_string())?;
-    let mut chart = ChartBuilder::on(&root)
-        .caption(title, ("sans-serif", 18))
-        .margin(12)
-        .x_label_area_size(40)
-        .y_label_area_size(70)
-        .build_cartesian_2d(
-            (x0 / 1.5..x1 * 1.5).log_scale(),
-            // Headroom above the data for the legend.
-            (y0 / 1.5..y1 * 6.0).log_scale(),
-        )
-        .map_err(|e| e.to_string())?;
-    chart
-        .configure_mesh()
-        .x_desc(x_label)
-        .y_desc(y_label)
-        .x_label_formatter(&log_tick)
-        .y_label_formatter(&log_tick)
-        .draw()
-        .map_err(|e| e.to_string())?;
-    for (k, (label, p)) in series.iter().enumerate() {
-        let c = colours[k % colours.len()];
-        let p: Vec<(f64, f64)> = p
-            .iter()
-            .copied()
-            .filter(|p| p.0 > 0.0 && p.1 > 0.0)
-            .collect();
-        chart
-            .draw_series(LineSeries::new(p.iter().copied(), c.stroke_width(2)))
-            .map_err(|e| e.to_string())?
-            .label(label.clone())
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2)));
-        chart
-            .draw_series(p.iter().map(|q| Circle::new(*q, 4, c.filled())))
-            .map_err(|e| e.to_string())?;
-    }
-    if let Some(f) = floor.filter(|f| *f > 0.0) {
-        // Dashes as short segments (the SVG backend of this plotters has no dash style).
-        let (a, b) = (x0 / 1.5, x1 * 1.5);
-        let n = 40;
-        let ratio = (b / a).powf(1.0 / f64::from(2 * n));
-        let dashes = (0..n).map(|k| {
-            let s = a * ratio.powi(2 * k);
-            PathElement::new(vec![(s, f), (s * ratio, f)], BLACK.stroke_width(1))
-        });
-        chart
-            .draw_series(dashes)
-            .map_err(|e| e.to_string())?
-            .label("noise floor")
-            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(1)));
-    }
-    chart
-        .configure_series_labels()
-        .border_style(BLACK)
-        .background_style(WHITE.mix(0.9))
-        .position(SeriesLabelPosition::UpperRight)
-        .draw()
-        .map_err(|e| e.to_string())?;
-    root.present().map_err(|e| e.to_string())
-}
-
-/// A log axis's tick label at 1, 2 and 5 times a power of ten only (plotters offers a tick at
-/// every integer mantissa, which overprint each other near the top of a decade).
-fn log_tick(v: &f64) -> String {
-    let e = v.log10().floor();
-    let m = v / 10f64.powf(e);
-    if [1.0, 2.0, 5.0].iter().any(|k| (m - k).abs() < 1e-6 * k) {
-        let s = format!("{v:.6}");
-        if (1e-3..1e4).contains(v) {
-            s.trim_end_matches('0').trim_end_matches('.').to_owned()
-        } else {
-            format!("{v:.0e}")
-        }
-    } else {
-        String::new()
-    }
 }
