@@ -14,7 +14,7 @@
 //!    as ΔV → 0.
 
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::ExitCode;
 
 use dmd_sim::output::{Curve, plot_svg};
@@ -26,8 +26,8 @@ use smd::{BodyModel, Integrator, Lattice, Settings, Setup, System, units};
 
 mod common;
 use common::{
-    PAPER, Report, csv, gas_overrides, integrated_difference, kt_label, matched_ratio, plot_points,
-    scene_run,
+    Args, PAPER, Report, csv, gas_overrides, integrated_difference, kt_label, matched_ratio,
+    plot_points, scene_run,
 };
 /// Sampling interval of every correlation function, DMD and SMD alike (a multiple of every
 /// SMD step), so that the curves share their abscissae.
@@ -42,49 +42,8 @@ const MAX_LAG_PS: f64 = 1.0;
 const SKIN_DENSE: f64 = 2.0;
 const SKIN_GAS: f64 = 4.0;
 
-struct Args {
-    quick: bool,
-    figures: PathBuf,
-}
-
-fn parse() -> Result<Args, String> {
-    let mut quick = false;
-    let mut figures = PathBuf::from("target/validate-figures");
-    let mut it = std::env::args().skip(1);
-    while let Some(a) = it.next() {
-        match a.as_str() {
-            "--quick" => quick = true,
-            "--figures" => figures = PathBuf::from(it.next().ok_or("--figures needs a folder")?),
-            other => return Err(format!("unknown argument `{other}`")),
-        }
-    }
-    Ok(Args { quick, figures })
-}
-
 fn main() -> ExitCode {
-    let args = match parse() {
-        Ok(a) => a,
-        Err(e) => {
-            eprintln!("validate_compare: {e}");
-            return ExitCode::from(2);
-        }
-    };
-    let _ = std::fs::create_dir_all(&args.figures);
-    let work = std::env::temp_dir().join(format!("dmd-compare-{}", std::process::id()));
-    let mut r = Report { ok: true };
-    let mut text = String::new();
-    if let Err(e) = validate(&args, &work, &mut r, &mut text) {
-        eprintln!("validate_compare: {e}");
-        r.ok = false;
-        let _ = writeln!(text, "\n**Error:** {e}");
-    }
-    let _ = std::fs::remove_dir_all(&work);
-    print!("{text}");
-    if r.ok {
-        ExitCode::SUCCESS
-    } else {
-        ExitCode::FAILURE
-    }
+    common::main_of("validate_compare", validate)
 }
 
 fn validate(args: &Args, work: &Path, r: &mut Report, w: &mut String) -> Result<(), String> {

@@ -16,7 +16,7 @@
 //! interval). Runs go two at a time (the machine has two cores); the measure is per thread.
 
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::ExitCode;
 
 use dmd_sim::run::Summary;
@@ -26,7 +26,7 @@ use rayon::prelude::*;
 
 mod common;
 use common::{
-    Bound, PAPER, Report, Series, bound_mark, csv, draw_panel, gas_overrides,
+    Args, Bound, PAPER, Report, Series, bound_mark, csv, draw_panel, gas_overrides,
     integrated_difference, kt_label, matched_cost, matched_ratio, scene_run,
 };
 
@@ -48,49 +48,8 @@ const OBSERVABLES: [(&str, &str); 4] = [
     ("g(r)", "Å"),
 ];
 
-struct Args {
-    quick: bool,
-    figures: PathBuf,
-}
-
-fn parse() -> Result<Args, String> {
-    let mut quick = false;
-    let mut figures = PathBuf::from("target/validate-figures");
-    let mut it = std::env::args().skip(1);
-    while let Some(a) = it.next() {
-        match a.as_str() {
-            "--quick" => quick = true,
-            "--figures" => figures = PathBuf::from(it.next().ok_or("--figures needs a folder")?),
-            other => return Err(format!("unknown argument `{other}`")),
-        }
-    }
-    Ok(Args { quick, figures })
-}
-
 fn main() -> ExitCode {
-    let args = match parse() {
-        Ok(a) => a,
-        Err(e) => {
-            eprintln!("validate_frontier: {e}");
-            return ExitCode::from(2);
-        }
-    };
-    let _ = std::fs::create_dir_all(&args.figures);
-    let work = std::env::temp_dir().join(format!("dmd-frontier-{}", std::process::id()));
-    let mut r = Report { ok: true };
-    let mut text = String::new();
-    if let Err(e) = validate(&args, &work, &mut r, &mut text) {
-        eprintln!("validate_frontier: {e}");
-        r.ok = false;
-        let _ = writeln!(text, "\n**Error:** {e}");
-    }
-    let _ = std::fs::remove_dir_all(&work);
-    print!("{text}");
-    if r.ok {
-        ExitCode::SUCCESS
-    } else {
-        ExitCode::FAILURE
-    }
+    common::main_of("validate_frontier", validate)
 }
 
 // ---- What is run ------------------------------------------------------------------------------

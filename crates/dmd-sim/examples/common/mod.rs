@@ -5,7 +5,9 @@
 //! Each example uses a subset.
 #![allow(dead_code)]
 
-use std::path::Path;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
 
 use dmd_sim::run::{Quiet, Summary, run_scene};
 use dmd_sim::scene::Scene;
@@ -29,6 +31,58 @@ pub(crate) fn gas_overrides() -> Vec<String> {
             units::density_from_reduced(0.01, LjRod::paper().sigma())
         ),
     ]
+}
+
+/// The command line of a validation example: `--quick` (the CI subset) and `--figures DIR`.
+pub(crate) struct Args {
+    pub(crate) quick: bool,
+    pub(crate) figures: PathBuf,
+}
+
+fn parse() -> Result<Args, String> {
+    let mut quick = false;
+    let mut figures = PathBuf::from("target/validate-figures");
+    let mut it = std::env::args().skip(1);
+    while let Some(a) = it.next() {
+        match a.as_str() {
+            "--quick" => quick = true,
+            "--figures" => figures = PathBuf::from(it.next().ok_or("--figures needs a folder")?),
+            other => return Err(format!("unknown argument `{other}`")),
+        }
+    }
+    Ok(Args { quick, figures })
+}
+
+/// The `main` of a validation example `name`: parses the arguments, runs `validate` in a
+/// scratch folder (removed afterwards), prints its Markdown and exits non-zero when a check
+/// failed or `validate` returned an error (2 for a bad argument).
+pub(crate) fn main_of(
+    name: &str,
+    validate: impl FnOnce(&Args, &Path, &mut Report, &mut String) -> Result<(), String>,
+) -> ExitCode {
+    let args = match parse() {
+        Ok(a) => a,
+        Err(e) => {
+            eprintln!("{name}: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    let _ = std::fs::create_dir_all(&args.figures);
+    let work = std::env::temp_dir().join(format!("dmd-{name}-{}", std::process::id()));
+    let mut r = Report { ok: true };
+    let mut text = String::new();
+    if let Err(e) = validate(&args, &work, &mut r, &mut text) {
+        eprintln!("{name}: {e}");
+        r.ok = false;
+        let _ = writeln!(text, "\n**Error:** {e}");
+    }
+    let _ = std::fs::remove_dir_all(&work);
+    print!("{text}");
+    if r.ok {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::FAILURE
+    }
 }
 
 /// Pass/fail bookkeeping of a report: `check` records a failure and returns the word to print.
