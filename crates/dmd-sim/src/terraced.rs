@@ -442,6 +442,52 @@ fn certified_jump<P: PairPotential>(
     (t, models)
 }
 
+/// Validation mode: searches `[from, to]` of a pair on `band` again on the fine `grid` (every
+/// extremum examined) and counts the check in `stats`. Returns the fine grid's root when it lies
+/// before `to` by more than `tol`, an event the search (or a certified jump) stepped over,
+/// counted as a miss.
+fn verify_stretch(
+    grid: Grid,
+    pair_at: &impl Fn(f64) -> (f64, f64),
+    band: &Band,
+    from: f64,
+    to: f64,
+    tol: f64,
+    stats: &mut SearchStats,
+) -> Option<f64> {
+    stats.verified += 1;
+    let mut reference = |t: f64| -> (f64, f64) {
+        let (u, du) = pair_at(t);
+        band.indicator(u, du)
+    };
+    let root = grid
+        .start(&mut reference, from, to, Crossing::Falling, f64::INFINITY)
+        .ok()?
+        .root()
+        .filter(|&tg| tg < to - tol)?;
+    stats.verify_misses += 1;
+    Some(root)
+}
+
+/// With the environment variable `DMD_DEBUG_MISSES` set: prints what `message` says of a miss,
+/// then `U` and `U̇` at 41 points of `[from, to]`.
+fn debug_miss(
+    pair_at: &impl Fn(f64) -> (f64, f64),
+    from: f64,
+    to: f64,
+    message: impl FnOnce() -> String,
+) {
+    if std::env::var_os("DMD_DEBUG_MISSES").is_none() {
+        return;
+    }
+    eprintln!("{}", message());
+    for q in 0..=40 {
+        let t = from + (to - from) * f64::from(q) / 40.0;
+        let (u, du) = pair_at(t);
+        eprintln!("  t {t:.9}  U {u:.9}  dU/dt {du:.6e}");
+    }
+}
+
 /// Mass and moment of inertia (about any axis through the centre perpendicular to the rod's
 /// own) of one species of rods.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -695,28 +741,18 @@ impl<P: PairPotential> Terraced<P> {
             self.stats.taylor_models += models;
             if t > t_start {
                 self.stats.certified_jumps += 1;
+                // The jumped stretch, searched on the fine grid like any search interval.
                 if let Some(grid) = self.verify {
-                    // The jumped stretch, searched on the fine grid like any search interval.
-                    self.stats.verified += 1;
-                    let mut reference = |t: f64| -> (f64, f64) {
-                        let (u, du) = pair_at(t);
-                        band.indicator(u, du)
-                    };
-                    let found =
-                        grid.start(&mut reference, t_start, t, Crossing::Falling, f64::INFINITY);
-                    if let Ok(rep) = found
-                        && rep
-                            .root()
-                            .is_some_and(|tg| tg < t - 1e-6 * self.settings.max_step)
+                    let tol = 1e-6 * self.settings.max_step;
+                    if let Some(tg) =
+                        verify_stretch(grid, &pair_at, &band, t_start, t, tol, &mut self.stats)
                     {
-                        self.stats.verify_misses += 1;
-                        if std::env::var_os("DMD_DEBUG_MISSES").is_some() {
-                            eprintln!(
+                        debug_miss(&pair_at, t_start, t, || {
+                            format!(
                                 "missed by a certified jump: pair ({i}, {j}) terrace {k} {band:?} \
-                                 from {t_start} to {t}, fine grid root at {:?}",
-                                rep.root()
-                            );
-                        }
+                                 from {t_start} to {t}, fine grid root at {tg}"
+                            )
+                        });
                     }
                 }
                 if t >= end {
@@ -811,37 +847,19 @@ impl<P: PairPotential> Terraced<P> {
             root_search::Outcome::Suspended(s) => s.time(),
             root_search::Outcome::NoRoot => end,
         };
+        // The same interval, searched again from where this call started.
         if let Some(grid) = self.verify {
-            self.stats.verified += 1;
-            let mut reference = |t: f64| -> (f64, f64) {
-                let (u, du) = pair_at(t);
-                band.indicator(u, du)
-            };
-            // The same interval, searched again from where this call started.
-            let found = grid.start(
-                &mut reference,
-                t0,
-                checked_to,
-                Crossing::Falling,
-                f64::INFINITY,
-            );
-            if let Ok(rep) = found
-                && let Some(tg) = rep.root()
-                && tg < checked_to - 1e-6 * self.settings.max_step
+            let tol = 1e-6 * self.settings.max_step;
+            if let Some(tg) =
+                verify_stretch(grid, &pair_at, &band, t0, checked_to, tol, &mut self.stats)
             {
-                self.stats.verify_misses += 1;
-                if std::env::var_os("DMD_DEBUG_MISSES").is_some() {
-                    eprintln!(
+                debug_miss(&pair_at, t0, checked_to, || {
+                    format!(
                         "missed: pair ({i}, {j}) terrace {k} {band:?} search from {t0} to \
                          {checked_to} (resumed: {}), fine grid root at {tg}",
                         matches!(from, Pending::Resume(..))
-                    );
-                    for q in 0..=40 {
-                        let t = t0 + (checked_to - t0) * f64::from(q) / 40.0;
-                        let (u, du) = pair_at(t);
-                        eprintln!("  t {t:.9}  U {u:.9}  dU/dt {du:.6e}");
-                    }
-                }
+                    )
+                });
             }
         }
         match report.outcome {

@@ -76,11 +76,25 @@ pub(crate) fn energy_and_virial(four_eps: f64, s2: f64) -> (f64, f64) {
     )
 }
 
+/// The distances at which `4ε[(σ/r)¹² − (σ/r)⁶] = level`, `level ≥ −ε`, in a cancellation-free
+/// form: with `x = (σ/r)⁶` the level is crossed where `x² − x − level/4ε = 0`, whose large root
+/// `x₊ = ½(1 + √(1 + level/ε))` is the inner distance (on the repulsive flank) and whose small
+/// root `x₋ = (−level/4ε)/x₊` the outer one (on the attractive flank, `+∞` for `level ≥ 0`,
+/// which is crossed once). Levels below `−ε` are taken as `−ε`.
+fn lj_preimages(epsilon: f64, sigma: f64, level: f64) -> (f64, f64) {
+    let ratio = (level / epsilon).max(-1.0);
+    let x_plus = 0.5 * (1.0 + (1.0 + ratio).sqrt());
+    let outer = if level < 0.0 {
+        sigma * ((-0.25 * ratio) / x_plus).powf(-1.0 / 6.0)
+    } else {
+        f64::INFINITY
+    };
+    (sigma * x_plus.powf(-1.0 / 6.0), outer)
+}
+
 /// The largest `r` at which `4ε[(σ/r)¹² − (σ/r)⁶]` is at or below `level < 0` (or at or above
-/// `level > 0`): 003 Eq. 25 without its `ζ/2`, in a cancellation-free form. With
-/// `x = (σ/r)⁶` the level is crossed where `x² − x − level/4ε = 0`; the outer root of a
-/// negative level is the small `x₋ = (−level/4ε)/x₊`, `x₊ = ½(1 + √(1 + level/ε))`, and a
-/// positive level is crossed once, at `x₊`.
+/// `level > 0`): 003 Eq. 25 without its `ζ/2`, the outer preimage of a negative level and the
+/// inner one of a positive level ([`lj_preimages`]).
 pub(crate) fn lj_reach(epsilon: f64, sigma: f64, level: f64) -> Result<f64, PotentialError> {
     if !level.is_finite() {
         return Err(PotentialError::NotFinite("level"));
@@ -88,56 +102,41 @@ pub(crate) fn lj_reach(epsilon: f64, sigma: f64, level: f64) -> Result<f64, Pote
     if level == 0.0 {
         return Err(PotentialError::LevelAtZero(level));
     }
-    let ratio = level / epsilon;
-    if ratio < -1.0 {
+    if level / epsilon < -1.0 {
         return Ok(0.0);
     }
-    let x_plus = 0.5 * (1.0 + (1.0 + ratio).sqrt());
-    let x = if level < 0.0 {
-        (-0.25 * ratio) / x_plus
-    } else {
-        x_plus
-    };
-    Ok(sigma * x.powf(-1.0 / 6.0))
+    let (inner, outer) = lj_preimages(epsilon, sigma, level);
+    Ok(if level < 0.0 { outer } else { inner })
 }
 
 /// The open intervals of `x` on which `lo < 4ε[(σ/x)¹² − (σ/x)⁶] < hi`: the band of a terrace
 /// in the coordinate of certified prediction ([`crate::certify`]). The function falls on
 /// `(0, x_m)` and rises on `(x_m, ∞)` towards 0, `x_m = 2^{1/6}σ`, so the band is one interval
 /// around `x_m` when `lo` is below the minimum `−ε`, else up to two (one on each flank), whose
-/// ends are the levels' inner (`x < x_m`) and outer preimages, the roots of [`lj_reach`].
+/// ends are the levels' inner (`x < x_m`) and outer preimages ([`lj_preimages`]).
 pub(crate) fn lj_intervals(epsilon: f64, sigma: f64, lo: f64, hi: f64) -> Vec<(f64, f64)> {
     // An empty band: below the minimum, or not an interval.
     let band = hi > -epsilon && lo < hi;
     if !band {
         return Vec::new();
     }
-    let ratio = |u: f64| (u / epsilon).max(-1.0);
-    let x_plus = |u: f64| 0.5 * (1.0 + (1.0 + ratio(u)).sqrt());
-    // Inner preimage of a level above −ε; outer preimage of a level in (−ε, 0).
-    let inner = |u: f64| -> f64 {
-        if u == f64::INFINITY {
-            0.0
-        } else {
-            sigma * x_plus(u).powf(-1.0 / 6.0)
-        }
-    };
-    let outer = |u: f64| -> f64 {
-        if u >= 0.0 {
-            f64::INFINITY
-        } else {
-            sigma * ((-0.25 * ratio(u)) / x_plus(u)).powf(-1.0 / 6.0)
-        }
+    // The hard core's level may be +∞: its inner preimage is the origin.
+    let (hi_in, hi_out) = if hi == f64::INFINITY {
+        (0.0, f64::INFINITY)
+    } else {
+        lj_preimages(epsilon, sigma, hi)
     };
     let above_minimum = lo > -epsilon;
     if !above_minimum {
         // The lowest terrace: the well's bottom lies inside the band.
-        vec![(inner(hi), outer(hi))]
-    } else if lo < 0.0 {
-        vec![(inner(hi), inner(lo)), (outer(lo), outer(hi))]
+        return vec![(hi_in, hi_out)];
+    }
+    let (lo_in, lo_out) = lj_preimages(epsilon, sigma, lo);
+    if lo < 0.0 {
+        vec![(hi_in, lo_in), (lo_out, hi_out)]
     } else {
         // A level at or above 0 has no outer preimage: the band lies on the inner flank.
-        vec![(inner(hi), inner(lo))]
+        vec![(hi_in, lo_in)]
     }
 }
 
