@@ -1180,7 +1180,7 @@ impl Scene {
                     "must be a whole number of samples ≥ 1, got 0",
                 ));
             }
-            if !self.wants_smooth_estimators() || !self.has_terraced_smooth_potential() {
+            if !self.wants_smooth_estimators() {
                 return Err(SceneError::invalid(
                     "output.smooth_every",
                     "only used with the smooth estimators (terraced rods or Gay–Berne bodies, \
