@@ -14,9 +14,10 @@ use dmd_sim::flexible::{Flexible, FlexibleType, RattleSettings, random_internal}
 use dmd_sim::model::PairModel;
 use dmd_sim::potential::Potentials;
 use dmd_sim::run::thread_cpu_seconds;
+use dmd_sim::search::{SearchMethod, SearchSettings};
 use dmd_sim::simulation::{LoopSettings, NoSampler, Simulation, Stop};
-use dmd_sim::sites::{ImpulseRule, MoleculeType, SiteAtom, Sites, random_orientations};
-use dmd_sim::terraced::{SearchMethod, SearchSettings};
+use dmd_sim::site_pairs::SiteAtom;
+use dmd_sim::sites::{ImpulseRule, MoleculeType, Sites, random_orientations};
 use event_queue::{BoundedQueue, LazyQueue, Ticket};
 use glam::{DMat3, DVec3};
 use plotters::prelude::*;
@@ -274,7 +275,7 @@ fn validate(quick: bool, figures: Option<PathBuf>, r: &mut Report) -> Result<(),
             .zip(&reference)
             .map(|(a, b)| (*a - *b).length())
             .fold(0.0, f64::max);
-        let misses = sim.model().search_stats().unwrap_or_default().verify_misses;
+        let misses = sim.model().search_stats().verify_misses;
         // Cost without the verification grid: the same run again.
         let mut timed = chains(0.04, 1.5, rattle(h, true), search(None), 21)?;
         let c0 = thread_cpu_seconds();
@@ -513,7 +514,7 @@ fn validate(quick: bool, figures: Option<PathBuf>, r: &mut Report) -> Result<(),
     let dp = (p1 - p0).length();
     let bonds = sim.model().bond_error(sim.now());
     let equipartition = sum_int / sum_com;
-    let st = sim.model().search_stats().unwrap_or_default();
+    let st = sim.model().search_stats();
     let fx = sim.model().flex_stats();
     let checked = sim.check();
     let ok = de < 1e-10

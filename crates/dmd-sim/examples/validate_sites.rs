@@ -11,9 +11,9 @@ use std::process::ExitCode;
 
 use dmd_sim::potential::Potentials;
 use dmd_sim::run::thread_cpu_seconds;
+use dmd_sim::search::{SearchMethod, SearchSettings, SearchStats};
 use dmd_sim::simulation::{LoopSettings, NoSampler, Simulation, Stop};
 use dmd_sim::sites::{ImpulseRule, MoleculeType, Sites, molecules, random_orientations};
-use dmd_sim::terraced::{SearchMethod, SearchSettings, SearchStats};
 use event_queue::{BoundedQueue, LazyQueue, Ticket};
 use glam::DVec3;
 
@@ -108,8 +108,7 @@ fn energy(sim: &Simulation<Sites, Queue>) -> f64 {
 }
 
 fn stats(sim: &Simulation<Sites, Queue>) -> SearchStats {
-    use dmd_sim::model::PairModel;
-    sim.model().search_stats().unwrap_or_default()
+    sim.model().search_stats()
 }
 
 fn main() -> ExitCode {
@@ -258,7 +257,7 @@ fn validate(quick: bool, r: &mut Report) -> Result<(), String> {
     .ok();
     let skewed = {
         let s = 0.32 / 3f64.sqrt();
-        let a = |x: f64, y: f64, z: f64, m: f64, sp: u32| dmd_sim::sites::SiteAtom {
+        let a = |x: f64, y: f64, z: f64, m: f64, sp: u32| dmd_sim::site_pairs::SiteAtom {
             position: DVec3::new(x, y, z) * s,
             mass: m,
             species: sp,

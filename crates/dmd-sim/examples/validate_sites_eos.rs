@@ -15,7 +15,6 @@ use std::fmt::Write as _;
 use std::process::ExitCode;
 
 use dmd_sim::init::{lattice, maxwell_boltzmann};
-use dmd_sim::model::PairModel;
 use dmd_sim::run::thread_cpu_seconds;
 use dmd_sim::scene::Scene;
 use dmd_sim::simulation::{LoopSettings, NoSampler, Simulation, Stop};
@@ -293,10 +292,9 @@ fn measure(
         // Failed searches, searches that began with their site pair across a boundary (the
         // trace of a missed collision) and events off their boundary.
         anomalies += sim.anomalies().total()
-            + sim
-                .model()
-                .search_stats()
-                .map_or(0, |s| s.failures + s.off_terrace + s.misfits);
+            + sim.model().search_stats().failures
+            + sim.model().search_stats().off_terrace
+            + sim.model().search_stats().misfits;
     }
     let e1 = sim.kinetic_energy() + sim.potential_energy();
     let m = zs.iter().sum::<f64>() / blocks as f64;

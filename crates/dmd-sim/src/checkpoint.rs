@@ -40,8 +40,8 @@ use serde::{Deserialize, Serialize};
 use crate::hmc::Chain;
 use crate::observable::{Correlations, Rdf, Series};
 use crate::output::{OutputError, write_atomically};
+use crate::search::SearchStats;
 use crate::simulation::SimState;
-use crate::terraced::SearchStats;
 
 /// First bytes of every checkpoint.
 pub const MAGIC: &[u8; 8] = b"\x89DMD-CK\n";

@@ -84,11 +84,11 @@ use rand_xoshiro::Xoshiro256PlusPlus;
 use root_search::{Adaptive, Crossing, Grid, Method, SearchError};
 
 use crate::event::{Boundary, Kind};
-use crate::model::{Executed, PairClass, PairModel, PairSetupError};
+use crate::model::{Executed, PairClass, PairModel, PairSetupError, Report};
 use crate::pair_state::{SavedSearches, SiteLevels};
 use crate::potential::Potentials;
-use crate::sites::{Band, SITE_OVERLAP_TOLERANCE, SiteAtom, SiteSearch, bracket, check_settings};
-use crate::terraced::{SearchMethod, SearchSettings, SearchStats};
+use crate::search::{SearchMethod, SearchSettings, SearchStats, bracket, check_settings};
+use crate::site_pairs::{Band, SITE_OVERLAP_TOLERANCE, SiteAtom, SiteSearch};
 
 pub use rattle::{Constraints, RattleError, Trajectory};
 
@@ -438,6 +438,31 @@ pub struct FlexStats {
     pub failures: u64,
 }
 
+impl FlexStats {
+    /// Adds the figures to a model's report (prefix `rattle.`).
+    pub fn report_into(&self, report: &mut Report) {
+        report.count("rattle.steps", self.steps);
+        report.count("rattle.restarts", self.restarts);
+        report.real(
+            "rattle.interpolated_bond_error",
+            self.interpolated_bond_error,
+        );
+        report.real("rattle.projection_energy", self.projection_energy);
+        report.count("rattle.failures", self.failures);
+    }
+
+    /// The figures of a model's report (`None` for a model without RATTLE).
+    pub fn from_report(report: &Report) -> Option<FlexStats> {
+        Some(FlexStats {
+            steps: report.get_count("rattle.steps")?,
+            restarts: report.get_count("rattle.restarts")?,
+            interpolated_bond_error: report.get_real("rattle.interpolated_bond_error")?,
+            projection_energy: report.get_real("rattle.projection_energy")?,
+            failures: report.get_count("rattle.failures")?,
+        })
+    }
+}
+
 /// What a prediction left for its pair.
 #[derive(Clone, Debug, PartialEq)]
 enum Pending {
@@ -535,10 +560,7 @@ impl Flexible {
         seed: u64,
     ) -> Result<Self, FlexibleError> {
         rattle.check()?;
-        check_settings(&settings).map_err(|e| match e {
-            crate::sites::SitesError::Search(s) => FlexibleError::Search(s),
-            other => FlexibleError::Settings(other.to_string()),
-        })?;
+        check_settings(&settings).map_err(FlexibleError::Search)?;
         let ns = potentials.n_species();
         for t in &types {
             if let Some(&s) = t.species.iter().find(|&&s| s as usize >= ns) {
@@ -648,6 +670,11 @@ impl Flexible {
     /// The RATTLE settings.
     pub fn rattle(&self) -> RattleSettings {
         self.rattle
+    }
+
+    /// Counters of this model's root searches so far.
+    pub fn search_stats(&self) -> SearchStats {
+        self.stats
     }
 
     /// What the RATTLE side did so far.
@@ -1366,7 +1393,7 @@ impl PairModel for Flexible {
             let pot = &self.potentials.all()[sp.potential as usize];
             let d = (dr + qi[sp.a as usize] - qj[sp.b as usize]).length();
             let held = self.site_level(i, j, sp.a as usize, sp.b as usize) as usize;
-            let level = crate::simulation::true_level(pot, held, d);
+            let level = pot.true_level(held, d);
             e += pot.levels()[level].energy;
         }
         (0, e)
@@ -1497,16 +1524,15 @@ impl PairModel for Flexible {
             .fold(DVec3::ZERO, |l, (&m, (&x, &v))| l + m * x.cross(v))
     }
 
-    fn search_stats(&self) -> Option<SearchStats> {
-        Some(self.stats)
+    fn report(&self) -> Report {
+        let mut r = Report::default();
+        self.stats.report_into(&mut r);
+        self.flex_stats().report_into(&mut r);
+        r
     }
 
     fn bond_error_at(&self, now: f64) -> Option<f64> {
         Some(self.bond_error(now))
-    }
-
-    fn rattle_stats(&self) -> Option<FlexStats> {
-        Some(self.flex_stats())
     }
 
     fn take_kinetic_error(&mut self) -> f64 {

@@ -21,9 +21,9 @@ use crate::flexible::{Flexible, FlexibleType, RattleSettings, random_internal};
 use crate::init::Configuration;
 use crate::potential::Potentials;
 use crate::scene::{Orientations, Positions, Scene, SceneError, SearchMethodSpec};
+use crate::search::{SearchMethod, SearchSettings};
+use crate::site_pairs::SiteAtom;
 use crate::site_scene::{ORIENTATION_TRIES, STEP_FRACTION, WINDOW_STEPS};
-use crate::sites::SiteAtom;
-use crate::terraced::{SearchMethod, SearchSettings};
 
 /// Default `rattle.step` in units of the shortest bond over the thermal speed `√(kT/m)` of the
 /// lightest atom: 0.0049 for the chains of the flexible validation (bonds 0.6, unit masses,
@@ -58,6 +58,17 @@ pub(crate) fn refuse_keys(scene: &Scene) -> Result<(), SceneError> {
         ));
     }
     Ok(())
+}
+
+/// The checks of a scene of semi-flexible molecules after those its sites share with rigid
+/// molecules (`site_scene::check`): the bonds of every species, then the RATTLE and search keys.
+///
+/// # Errors
+/// [`SceneError::Invalid`] naming the key.
+pub(crate) fn check(scene: &Scene) -> Result<(), SceneError> {
+    let (_, atoms) = crate::site_scene::atoms_of(scene)?;
+    types_of(scene, &atoms)?;
+    check_rest(scene)
 }
 
 /// The molecule types of a scene of semi-flexible molecules (`atoms` per species, as

@@ -3,7 +3,7 @@
 //! [`install`] (called by the `dmd` command) sets a flag on the first signal; the run stops at
 //! its next re-basing of the time origin (the loop pauses at every re-basing while a handler is
 //! installed), where a checkpoint is exact, writes `DIR/checkpoint.dmd` and returns
-//! [`RunError::Interrupted`](crate::run::RunError::Interrupted), so that `dmd resume` continues
+//! [`RunError::Interrupted`](crate::reporting::RunError::Interrupted), so that `dmd resume` continues
 //! it bit for bit. A second signal ends the process at once with [`EXIT_STATUS`].
 
 use std::sync::Arc;

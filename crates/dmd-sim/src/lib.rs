@@ -48,6 +48,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+pub mod block;
 pub mod body;
 pub mod cell;
 pub mod chains;
@@ -60,24 +61,30 @@ pub mod hmc;
 pub mod init;
 pub mod interrupt;
 pub mod limits;
+mod load;
 pub mod model;
 pub mod neighbour;
 pub mod observable;
 pub mod outdir;
 pub mod output;
 pub mod pair_state;
+mod pairs;
 pub mod potential;
 pub mod reference;
+mod reporting;
 pub mod rods;
 pub mod run;
 pub mod scene;
+pub mod search;
 // Issue 10: rigid site-based molecules (seed 000).
 pub mod schedule;
 pub mod simulation;
+pub mod site_pairs;
 pub mod site_scene;
 pub mod sites;
 // Issue 8: the standard-MD engine on the same scenes.
 pub mod smd_engine;
+pub mod smd_spec;
 pub mod smooth;
 pub mod sum;
 pub mod terraced;

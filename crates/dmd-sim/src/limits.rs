@@ -15,22 +15,10 @@
 //! - **Skin**: at least [`MIN_SKIN_FRACTION`] of the interaction reach (in `run`, where the
 //!   reach is known).
 
+pub use crate::output::{LAG_BYTES, SERIES_ROW_BYTES, short, trajectory_line_bytes};
+pub use crate::scene::{DEFAULT_MAX_BYTES, MAX_STEP_ENERGY};
 use crate::scene::{PotentialSpec, Scene, SceneError};
 use crate::units::Units;
-
-/// Default of `output.max_bytes`: 4 GB for any one output (in memory or on disk).
-pub const DEFAULT_MAX_BYTES: u64 = 4_000_000_000;
-
-/// Bytes of one row of `series.csv` (six numbers in full precision; also more than its 48
-/// bytes in memory).
-pub const SERIES_ROW_BYTES: f64 = 150.0;
-
-/// Bytes of one lag of the correlation buffers (MSD, VACF, two orientational ACFs, count).
-pub const LAG_BYTES: f64 = 40.0;
-
-/// Largest |ΔU| of a finite step, in the scene's energy unit: far beyond any physical energy,
-/// and far enough below `f64::MAX` (1.8e308) that sums over any number of pairs stay finite.
-pub const MAX_STEP_ENERGY: f64 = 1e100;
 
 /// `kT` must lie within this factor of the energy scale of the potential (either way): the
 /// sums of kinetic and potential energy then keep about ten significant digits of each.
@@ -44,25 +32,6 @@ pub const TEMPERATURE_RANGE: [f64; 2] = [1e-100, 1e100];
 /// order of the reach costs more than a thousand neighbour-list rebuilds, and a skin below the
 /// round-off of positions never lets simulated time advance.
 pub const MIN_SKIN_FRACTION: f64 = 1e-3;
-
-/// Bytes per body of one trajectory frame: species name, position and velocity with ten
-/// decimals and the id; rods add a quaternion with twelve and the shape.
-pub fn trajectory_line_bytes(rods: bool) -> f64 {
-    if rods { 190.0 } else { 110.0 }
-}
-
-/// A number in short form: `8e15`, `2.8e9`, `0.001`, `150`.
-pub fn short(x: f64) -> String {
-    if x != 0.0 && !(1e-3..1e6).contains(&x.abs()) {
-        let s = format!("{x:.2e}");
-        let (m, e) = s.split_once('e').unwrap_or((&s, "0"));
-        let m = m.trim_end_matches('0').trim_end_matches('.');
-        format!("{m}e{e}")
-    } else {
-        let s = format!("{x:.3}");
-        s.trim_end_matches('0').trim_end_matches('.').to_owned()
-    }
-}
 
 /// The scene's `output.max_bytes`, or the default.
 pub fn max_bytes(scene: &Scene) -> u64 {

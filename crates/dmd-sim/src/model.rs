@@ -1,7 +1,7 @@
 //! Interaction models: how a pair's next event is predicted and executed.
 //!
 //! A scene picks its model once and the event loop is compiled for it ([`PairModel`] is a
-//! generic parameter of [`Simulation`](crate::simulation::Simulation), never a trait object):
+//! generic parameter of the event loop's `Simulation`, never a trait object):
 //!
 //! - [`HardSpheres`]: every pair table is one infinite step. Nothing is stored per pair; the
 //!   prediction is one quadratic, the execution one reflection.
@@ -288,14 +288,10 @@ pub trait PairModel {
         None
     }
 
-    /// What the RATTLE integration did (semi-flexible molecules only).
-    fn rattle_stats(&self) -> Option<crate::flexible::FlexStats> {
-        None
-    }
-
-    /// Counters of the model's own work (root searches), if it has any.
-    fn search_stats(&self) -> Option<crate::terraced::SearchStats> {
-        None
+    /// Named counters of the model's own work (root searches, constraint integration): the
+    /// loop and the driver read them by name, so a model adds counters without a new hook.
+    fn report(&self) -> Report {
+        Report::default()
     }
 
     /// Draws every body's angular velocity from its Gaussian (Maxwell–Boltzmann) distribution
@@ -816,7 +812,7 @@ impl PairModel for Stepped {
 /// The level and energy of a pair of a radial step potential at separation `dr` whose stored
 /// level is `stored` ([`PairModel::configured_level`]).
 fn configured_step(pot: &StepPotential, stored: u16, dr: DVec3) -> (u16, f64) {
-    let level = crate::simulation::true_level(pot, stored as usize, dr.length());
+    let level = pot.true_level(stored as usize, dr.length());
     let energy = pot.levels()[level].energy;
     if energy == f64::INFINITY {
         // Inside the hard core: the level at contact (the core is the last level).
@@ -901,5 +897,50 @@ mod tests {
         // Leaving while approaching: the far side of the sphere.
         let t = exit_time(0.25, -0.5, 1.0, 2.25).unwrap();
         assert!((t - 2.0).abs() < 1e-15);
+    }
+}
+
+/// Named counters and maxima of a model's own work, in the order the model wrote them.
+///
+/// Counts are exact integers; maxima and other real-valued figures are stored apart, so that
+/// a count never passes through a float.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Report {
+    counts: Vec<(&'static str, u64)>,
+    reals: Vec<(&'static str, f64)>,
+}
+
+impl Report {
+    /// Records count `name`.
+    pub fn count(&mut self, name: &'static str, value: u64) {
+        self.counts.push((name, value));
+    }
+
+    /// Records real-valued figure `name`.
+    pub fn real(&mut self, name: &'static str, value: f64) {
+        self.reals.push((name, value));
+    }
+
+    /// Count `name`, if the model keeps it.
+    pub fn get_count(&self, name: &str) -> Option<u64> {
+        self.counts
+            .iter()
+            .find(|(n, _)| *n == name)
+            .map(|&(_, v)| v)
+    }
+
+    /// Real-valued figure `name`, if the model keeps it.
+    pub fn get_real(&self, name: &str) -> Option<f64> {
+        self.reals.iter().find(|(n, _)| *n == name).map(|&(_, v)| v)
+    }
+
+    /// Every count, in the order written.
+    pub fn counts(&self) -> impl Iterator<Item = (&'static str, u64)> + '_ {
+        self.counts.iter().copied()
+    }
+
+    /// Every real-valued figure, in the order written.
+    pub fn reals(&self) -> impl Iterator<Item = (&'static str, f64)> + '_ {
+        self.reals.iter().copied()
     }
 }

@@ -8,6 +8,32 @@ use std::path::{Path, PathBuf};
 
 use crate::simulation::View;
 
+/// Bytes of one row of `series.csv` (six numbers in full precision; also more than its 48
+/// bytes in memory).
+pub const SERIES_ROW_BYTES: f64 = 150.0;
+
+/// Bytes of one lag of the correlation buffers (MSD, VACF, two orientational ACFs, count).
+pub const LAG_BYTES: f64 = 40.0;
+
+/// Bytes per body of one trajectory frame: species name, position and velocity with ten
+/// decimals and the id; rods add a quaternion with twelve and the shape.
+pub fn trajectory_line_bytes(rods: bool) -> f64 {
+    if rods { 190.0 } else { 110.0 }
+}
+
+/// A number in short form: `8e15`, `2.8e9`, `0.001`, `150`.
+pub fn short(x: f64) -> String {
+    if x != 0.0 && !(1e-3..1e6).contains(&x.abs()) {
+        let s = format!("{x:.2e}");
+        let (m, e) = s.split_once('e').unwrap_or((&s, "0"));
+        let m = m.trim_end_matches('0').trim_end_matches('.');
+        format!("{m}e{e}")
+    } else {
+        let s = format!("{x:.3}");
+        s.trim_end_matches('0').trim_end_matches('.').to_owned()
+    }
+}
+
 /// An output could not be written.
 #[derive(Debug, thiserror::Error)]
 #[error("cannot write {path}: {message}")]

@@ -11,7 +11,9 @@
 //! [`PairStates`](crate::pair_state::PairStates)) and changed only by the events of that pair:
 //! recomputing it from the distance at a boundary would flip on round-off.
 
-use crate::scene::Scene;
+/// Relative distance within which a stored level is kept at its boundary (round-off of an
+/// event executed at that boundary).
+const BOUNDARY_TOLERANCE: f64 = 1e-9;
 
 /// One level of a stepped potential, with what is needed to predict and execute its events.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -37,6 +39,23 @@ pub struct StepPotential {
 }
 
 impl StepPotential {
+    /// The level of a pair at distance `d` whose stored level is `stored`: the stored level if the
+    /// distance is on it or within round-off of its boundary, else the level of the distance.
+    pub fn true_level(&self, stored: usize, d: f64) -> usize {
+        let expected = self.level_at(d);
+        if expected == stored {
+            return stored;
+        }
+        let n = self.radii().len();
+        if stored <= n && expected.abs_diff(stored) == 1 {
+            let at = self.radii()[n - stored.max(expected)];
+            if (d - at).abs() <= BOUNDARY_TOLERANCE * at {
+                return stored;
+            }
+        }
+        expected
+    }
+
     /// Builds the levels from `(radius, energy step)` pairs, radii strictly increasing (the
     /// scene checks that; this constructor trusts it).
     pub fn new(steps: &[[f64; 2]]) -> Self {
@@ -132,34 +151,6 @@ pub struct Potentials {
 }
 
 impl Potentials {
-    /// From a checked scene (every pair of species has exactly one table).
-    pub fn from_scene(scene: &Scene) -> Self {
-        let names: Vec<&str> = scene.species.iter().map(|s| s.name.as_str()).collect();
-        let n = names.len();
-        let mut table = vec![u32::MAX; n * n];
-        let mut potentials = Vec::new();
-        for p in &scene.pair {
-            let a = names
-                .iter()
-                .position(|&x| x == p.species[0])
-                .expect("checked");
-            let b = names
-                .iter()
-                .position(|&x| x == p.species[1])
-                .expect("checked");
-            let k = potentials.len() as u32;
-            potentials.push(StepPotential::new(&p.steps));
-            table[a * n + b] = k;
-            table[b * n + a] = k;
-        }
-        debug_assert!(table.iter().all(|&k| k != u32::MAX));
-        Potentials {
-            n_species: n,
-            table,
-            potentials,
-        }
-    }
-
     /// From explicit tables: `tables[k] = ((a, b), steps)` for species `a`, `b` in
     /// `0..n_species`. Every unordered pair must appear exactly once, with radii strictly
     /// increasing (what a scene's check guarantees).

@@ -20,9 +20,8 @@ use crate::scene::{
     NearMinimumSpec, PlacementSpec, PotentialSpec, Scene, SceneError, SearchMethodSpec,
     StepEnergySpec, TerraceSpec,
 };
-use crate::terraced::{
-    PairTable, PairTerraces, RodSpecies, SearchMethod, SearchSettings, draw_omega, radial_steps,
-};
+use crate::search::{SearchMethod, SearchSettings};
+use crate::terraced::{PairTable, PairTerraces, RodSpecies, draw_omega, radial_steps};
 
 /// The type of an absent profile (Gay–Berne has none).
 type NoProfile = Profile<fn(f64) -> f64>;
@@ -356,6 +355,77 @@ pub fn equipartitioned_omegas(axes: &[DVec3], inertia: &[f64], kt: f64, seed: u6
         }
     }
     w
+}
+
+impl Scene {
+    /// Whether the event-driven engine runs this scene as terraced rods or Gay–Berne bodies
+    /// (`Terraced<P>`), whose smooth potential the estimators evaluate.
+    pub fn has_terraced_smooth_potential(&self) -> bool {
+        !self.has_bonds()
+            && !self.has_sites()
+            && self
+                .pair
+                .first()
+                .and_then(|p| p.potential)
+                .is_some_and(|p| p.is_anisotropic())
+    }
+
+    /// Whether a run of this scene evaluates the smooth estimators: `output.smooth_estimators`
+    /// (default on), a terraced smooth potential and a sampling interval.
+    pub fn wants_smooth_estimators(&self) -> bool {
+        self.output.smooth_estimators.unwrap_or(true)
+            && self.output.sample_interval.is_some()
+            && self.has_terraced_smooth_potential()
+    }
+}
+
+/// The estimator of a terraced scene (in internal units) over its pair tables, with the
+/// smoothing window the smd engine would use for each pair (`[smd] smoothing`, else its
+/// default), or `None` when the scene does not want one or its cut-off does not fit the box
+/// (minimum image needs `r_u` below half the shortest side; an explicit
+/// `output.smooth_estimators = true` then is an error).
+///
+/// # Errors
+/// [`SceneError::Invalid`] naming `output.smooth_estimators` or
+/// `smd.smoothing`.
+pub fn estimator<P: PairPotential + Clone + std::fmt::Debug + Send + 'static>(
+    scene: &Scene,
+    lengths: DVec3,
+    tables: &[PairTable<P>],
+) -> Result<Option<Box<dyn crate::smooth::Evaluate>>, SceneError> {
+    if !scene.wants_smooth_estimators() {
+        return Ok(None);
+    }
+    let mut pots = Vec::with_capacity(tables.len());
+    let mut cutoff: f64 = 0.0;
+    for (k, ((a, b), t)) in tables.iter().enumerate() {
+        let spec = scene.pair[k]
+            .potential
+            .expect("terraced pairs have a potential");
+        let (r_l, r_u) = crate::smd_spec::window(scene, &spec);
+        let p = potential::Smoothed::new(t.potential().clone(), r_l, r_u)
+            .map_err(|e| SceneError::invalid("smd.smoothing", e.to_string()))?;
+        cutoff = cutoff.max(r_u);
+        pots.push(((*a, *b), p));
+    }
+    let half = 0.5 * lengths.min_element();
+    if cutoff >= half {
+        return match scene.output.smooth_estimators {
+            Some(true) => Err(SceneError::invalid(
+                "output.smooth_estimators",
+                format!(
+                    "the smooth potential's cut-off r_u = {cutoff} reaches half the shortest box \
+                     side {half:.6}: a body would interact with two images of another; use more \
+                     bodies or a smaller smd.smoothing.r_u"
+                ),
+            )),
+            _ => Ok(None),
+        };
+    }
+    Ok(Some(Box::new(crate::smooth::Estimator::new(
+        scene.species.len(),
+        pots,
+    ))))
 }
 
 #[cfg(test)]

@@ -22,61 +22,20 @@ use crate::hmc::{Acceptance, Chain, Ensemble, Faulty, HmcSettings, HmcSummary};
 use crate::init::{Configuration, lattice, maxwell_boltzmann, read_orientations, read_xyz};
 use crate::model::{HardSpheres, PairModel, Stepped};
 use crate::observable::{Correlations, Observers, Rdf, Series};
-use crate::output::{Curve, OutputError, Trajectory, plot_svg, write_atomically, write_csv};
+use crate::output::{OutputError, Trajectory, write_atomically, write_csv};
+use crate::reporting::write_observables;
+pub use crate::reporting::{Quiet, Reporter, RunError, thread_cpu_seconds, unit_names};
 use crate::rods::{Plan, equipartitioned_omegas, random_axes, rod_species, search_settings};
 use crate::scene::{
     AcceptKind, EnsembleKind, Orientations, Positions, QueueKind, Scene, SceneError,
     ThermostatKind, ThermostatPhase,
 };
 use crate::schedule::Scheduler;
-use crate::simulation::{Andersen, LoopSettings, Progress, SetupError, SimError, Simulation, Stop};
-use crate::terraced::{PairTable, SearchStats, Terraced};
+use crate::search::SearchStats;
+use crate::simulation::MAX_REBASE_EVENTS;
+use crate::simulation::{Andersen, LoopSettings, Progress, SetupError, Simulation, Stop};
+use crate::terraced::{PairTable, Terraced};
 use crate::units::Units;
-
-/// Most events between re-basings: generations are `u32` and every event list is rebuilt at a
-/// re-basing, so no generation can wrap round while an event predicted with it waits.
-pub const MAX_REBASE_EVENTS: u64 = 1 << 31;
-
-/// Why a run failed.
-#[derive(Debug, thiserror::Error)]
-pub enum RunError {
-    /// The scene is not acceptable.
-    #[error(transparent)]
-    Scene(#[from] SceneError),
-    /// The simulation could not go on.
-    #[error(transparent)]
-    Sim(#[from] SimError),
-    /// An output could not be written.
-    #[error(transparent)]
-    Output(#[from] OutputError),
-    /// A checkpoint cannot be resumed (issue 9).
-    #[error(transparent)]
-    Checkpoint(#[from] CheckpointError),
-    /// The standard-MD engine could not go on (issue 8).
-    #[error("smd: {0}")]
-    Smd(#[from] smd::SmdError),
-    /// Stopped after a checkpoint, as [`RunOptions::halt_after_checkpoint`] asked.
-    #[error("halted after writing a checkpoint, as asked")]
-    Halted,
-    /// Stopped by a signal ([`crate::interrupt`]) at a re-basing, after saving this checkpoint
-    /// (none where the state cannot be saved: site molecules).
-    #[error("stopped by a signal{}", match .checkpoint {
-        Some(p) => format!(" after saving {}", p.display()),
-        None => " (this run's state cannot be saved)".to_owned(),
-    })]
-    Interrupted {
-        /// The checkpoint written.
-        checkpoint: Option<std::path::PathBuf>,
-    },
-    /// A job of an ensemble of chains or sweep points failed (issue 9).
-    #[error("job {job}: {source}")]
-    Job {
-        /// The job's folder.
-        job: String,
-        /// Why.
-        source: Box<RunError>,
-    },
-}
 
 /// What a run does besides the scene (issue 9): checkpoints, and resuming from one.
 #[derive(Debug, Default)]
@@ -91,20 +50,6 @@ pub struct RunOptions {
     /// would (tests of `dmd resume`).
     pub halt_after_checkpoint: bool,
 }
-
-/// Receives progress reports (the `dmd` command draws a progress bar).
-pub trait Reporter {
-    /// A phase (`equilibration` or `production`) starts with this length.
-    fn phase(&mut self, _name: &str, _length: Stop) {}
-    /// Progress within the phase.
-    fn progress(&mut self, _p: Progress) {}
-    /// The phase ended.
-    fn done(&mut self) {}
-}
-
-/// A reporter that reports nothing.
-pub struct Quiet;
-impl Reporter for Quiet {}
 
 /// Energies, momentum and counters of a run, as written to `summary.json`. Units are the
 /// scene's (reduced, σ = m = kT = 1 by default; in molecular units energies in kJ/mol,
@@ -142,7 +87,7 @@ pub struct Summary {
     /// Time-averaged kinetic temperature, `2⟨K⟩ / dof`.
     pub temperature: f64,
     /// Block-average error of the mean kinetic temperature, from the instantaneous one at
-    /// every sample (Flyvbjerg–Petersen, [`block_average`](crate::hmc::block_average);
+    /// every sample (Flyvbjerg–Petersen, [`block_average`](crate::block::block_average);
     /// `null` without `output.sample_interval` or with fewer than 16 samples).
     pub temperature_error: Option<f64>,
     /// Kinetic temperature `2K/dof` at the start of production: the bath temperature exactly
@@ -425,13 +370,13 @@ pub fn run_scene_with(
         }
         Plan::Rods(tables) => {
             ctx.smooth
-                .set(crate::smooth::estimator(scene, config.lengths, &tables)?);
+                .set(crate::rods::estimator(scene, config.lengths, &tables)?);
             let model = terraced_model(scene, base, &config, tables)?;
             ctx.go_any_queue(model, reporter)
         }
         Plan::GayBerne(tables) => {
             ctx.smooth
-                .set(crate::smooth::estimator(scene, config.lengths, &tables)?);
+                .set(crate::rods::estimator(scene, config.lengths, &tables)?);
             let model = terraced_model(scene, base, &config, tables)?;
             ctx.go_any_queue(model, reporter)
         }
@@ -726,7 +671,7 @@ impl Context<'_> {
                 p0.to_array(),
                 sim.momentum_scale(),
             ));
-            run.record.search_start = sim.model().search_stats();
+            run.record.search_start = SearchStats::from_report(&sim.model().report());
             stage = Stage::Production(match &scene.hmc {
                 Some(h) => Left::Segments(h.segments),
                 None => left_of(stop),
@@ -794,9 +739,8 @@ impl Context<'_> {
         };
         let rot_dof = sim.model().rotational_dof();
         let kt_trans = 2.0 * (mean_k - mean_rot) / (dof - rot_dof);
-        let search = sim
-            .model()
-            .search_stats()
+        let search = sim.model().report();
+        let search = SearchStats::from_report(&search)
             .zip(search0)
             .map(|(a, b)| a.since(&b));
         let u = self.units;
@@ -931,7 +875,7 @@ impl Context<'_> {
                 .as_ref()
                 .map(|c| hmc_out(c.summary(n as usize), &u)),
             bond_error: sim.model().bond_error_at(sim.now()),
-            rattle: sim.model().rattle_stats(),
+            rattle: crate::flexible::FlexStats::from_report(&sim.model().report()),
         };
         if let Some(dir) = out {
             summary.files = write_observables(dir, &mut observers, o.plots, &self.units)?;
@@ -1307,24 +1251,6 @@ fn choose_skin(
     Ok(skin.min(0.999 * fit))
 }
 
-/// Names of the units of a summary's `units` (`reduced` or `molecular`): `(length, time,
-/// energy, temperature, pressure)`, as [`Units::names`].
-pub fn unit_names(units: &str) -> [&'static str; 5] {
-    let system = if units == "molecular" {
-        crate::scene::UnitSystem::Molecular
-    } else {
-        crate::scene::UnitSystem::Reduced
-    };
-    Units::of(system).names()
-}
-
-/// CPU time of the calling thread, from `/proc/thread-self/schedstat` (Linux).
-pub fn thread_cpu_seconds() -> Option<f64> {
-    let text = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
-    let ns: f64 = text.split_whitespace().next()?.parse().ok()?;
-    Some(ns * 1e-9)
-}
-
 fn setup_error(scene: &Scene, config: &Configuration, units: &Units, e: SetupError) -> RunError {
     let name = |k: &u32| &scene.species[config.species[*k as usize] as usize].name;
     let (key, problem) = match (&e, scene.init.positions) {
@@ -1377,185 +1303,4 @@ fn setup_error(scene: &Scene, config: &Configuration, units: &Units, e: SetupErr
         _ => ("init.positions", e.to_string()),
     };
     SceneError::invalid(key, problem).into()
-}
-
-pub(crate) fn write_observables(
-    dir: &Path,
-    obs: &mut Observers,
-    plots: bool,
-    units: &Units,
-) -> Result<Vec<String>, OutputError> {
-    let mut files = Vec::new();
-    let mut table = |name: &str,
-                     header: &[&str],
-                     rows: Vec<Vec<f64>>,
-                     plot: Option<(&str, &str, &str, Vec<Curve<'_>>)>|
-     -> Result<(), OutputError> {
-        let csv = format!("{name}.csv");
-        write_csv(&dir.join(&csv), header, &rows)?;
-        files.push(csv);
-        if let (true, Some((title, xl, yl, curves))) = (plots, plot) {
-            let svg = format!("{name}.svg");
-            plot_svg(&dir.join(&svg), title, xl, yl, &curves)?;
-            files.push(svg);
-        }
-        Ok(())
-    };
-    if let Some(rdf) = &obs.rdf {
-        let t = rdf.table();
-        table(
-            "rdf",
-            &["r", "g"],
-            t.iter().map(|&(r, g)| vec![r, g]).collect(),
-            Some((
-                "Radial distribution function",
-                "r",
-                "g(r)",
-                vec![Curve {
-                    label: "g(r)",
-                    points: t,
-                }],
-            )),
-        )?;
-    }
-    if let Some(c) = &obs.correlations {
-        if c.wants_msd() {
-            let t = c.msd_table();
-            table(
-                "msd",
-                &["t", "msd"],
-                t.iter().map(|&(x, y)| vec![x, y]).collect(),
-                Some((
-                    "Mean-square displacement",
-                    "t",
-                    "<|r(t) - r(0)|^2>",
-                    vec![Curve {
-                        label: "MSD",
-                        points: t,
-                    }],
-                )),
-            )?;
-        }
-        if c.wants_vacf() {
-            let t = c.vacf_table();
-            let c0 = t.first().map(|p| p.1).unwrap_or(1.0);
-            table(
-                "vacf",
-                &["t", "vacf", "vacf_normalised"],
-                t.iter().map(|&(x, y)| vec![x, y, y / c0]).collect(),
-                Some((
-                    "Velocity autocorrelation (normalised)",
-                    "t",
-                    "<v(0).v(t)> / <v^2>",
-                    vec![Curve {
-                        label: "VACF",
-                        points: t.iter().map(|&(x, y)| (x, y / c0)).collect(),
-                    }],
-                )),
-            )?;
-        }
-        if c.wants_oacf() {
-            let t = c.oacf_table();
-            table(
-                "oacf",
-                &["t", "s0_dot_st", "p2"],
-                t.iter().map(|&(x, a, b)| vec![x, a, b]).collect(),
-                Some((
-                    "Long-axis orientational autocorrelation",
-                    "t",
-                    "<s(0).s(t)>, <P2(s(0).s(t))>",
-                    vec![
-                        Curve {
-                            label: "<s(0).s(t)>",
-                            points: t.iter().map(|&(x, a, _)| (x, a)).collect(),
-                        },
-                        Curve {
-                            label: "<P2>",
-                            points: t.iter().map(|&(x, _, b)| (x, b)).collect(),
-                        },
-                    ],
-                )),
-            )?;
-        }
-    }
-    if let Some(s) = &obs.series {
-        let rows: Vec<crate::observable::SeriesRow> = s
-            .rows()
-            .iter()
-            .map(|r| crate::observable::SeriesRow {
-                time: r.time,
-                kinetic: units.energy_out(r.kinetic),
-                potential: units.energy_out(r.potential),
-                total: units.energy_out(r.total),
-                temperature: units.temperature_out(r.temperature),
-                pressure: units.pressure_out(r.pressure),
-            })
-            .collect();
-        table(
-            "series",
-            &[
-                "t",
-                "kinetic",
-                "potential",
-                "total",
-                "temperature",
-                "pressure",
-            ],
-            rows.iter()
-                .map(|r| {
-                    vec![
-                        r.time,
-                        r.kinetic,
-                        r.potential,
-                        r.total,
-                        r.temperature,
-                        r.pressure,
-                    ]
-                })
-                .collect(),
-            None,
-        )?;
-        if plots {
-            let pts = |f: fn(&crate::observable::SeriesRow) -> f64| -> Vec<(f64, f64)> {
-                rows.iter().map(|r| (r.time, f(r))).collect()
-            };
-            plot_svg(
-                &dir.join("series-energy.svg"),
-                "Energy",
-                "t",
-                "energy",
-                &[
-                    Curve {
-                        label: "kinetic",
-                        points: pts(|r| r.kinetic),
-                    },
-                    Curve {
-                        label: "potential",
-                        points: pts(|r| r.potential),
-                    },
-                    Curve {
-                        label: "total",
-                        points: pts(|r| r.total),
-                    },
-                ],
-            )?;
-            plot_svg(
-                &dir.join("series-pressure.svg"),
-                "Pressure (averaged over each sampling interval)",
-                "t",
-                "P",
-                &[Curve {
-                    label: "pressure",
-                    points: pts(|r| r.pressure),
-                }],
-            )?;
-            files.push("series-energy.svg".into());
-            files.push("series-pressure.svg".into());
-        }
-    }
-    if let Some(t) = obs.trajectory.take() {
-        t.finish()?;
-        files.push("trajectory.xyz".into());
-    }
-    Ok(files)
 }

@@ -13,7 +13,7 @@
 //! `tests/scene_errors.rs` pins the message of each kind of mistake.
 
 use std::fmt;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use serde::{Deserialize, Deserializer};
 
@@ -112,10 +112,10 @@ pub struct Scene {
     pub sweep: Option<SweepSpec>,
     /// The engine: `dmd` (event-driven, default) or `smd` (standard MD, issue 8).
     #[serde(default)]
-    pub engine: crate::smd_engine::Engine,
+    pub engine: Engine,
     /// Settings of the standard-MD engine (issue 8; ignored by the event-driven one).
     #[serde(default)]
-    pub smd: Option<crate::smd_engine::SmdSpec>,
+    pub smd: Option<SmdSpec>,
     /// Site–site potentials of rigid site molecules, one per unordered pair of site kinds
     /// (issue 10).
     #[serde(default)]
@@ -134,7 +134,7 @@ pub enum UnitSystem {
     #[default]
     Reduced,
     /// Lengths in Å, masses in g/mol, energies in kJ/mol, times in ps, temperatures in K,
-    /// moments of inertia in g/mol·Å² (see [`units`](crate::units)).
+    /// moments of inertia in g/mol·Å² (see the `units` module).
     Molecular,
 }
 
@@ -201,6 +201,49 @@ pub struct HmcSpec {
     /// Half width of the ΔH histogram in units of the temperature (default 10).
     #[serde(default = "default_histogram_range")]
     pub histogram_range: f64,
+}
+
+/// Default of `output.max_bytes`: 4 GB for any one output (in memory or on disk).
+pub const DEFAULT_MAX_BYTES: u64 = 4_000_000_000;
+
+/// Largest |ΔU| of a finite step, in the scene's energy unit: far beyond any physical energy,
+/// and far enough below `f64::MAX` (1.8e308) that sums over any number of pairs stay finite.
+pub const MAX_STEP_ENERGY: f64 = 1e100;
+
+/// Which engine runs a scene.
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum Engine {
+    /// The event-driven engine (default).
+    #[default]
+    Dmd,
+    /// Standard MD of the `smd` crate on the smoothed continuous potential.
+    Smd,
+}
+
+/// `[smd]`: the numerical settings of the standard-MD engine.
+#[derive(Clone, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SmdSpec {
+    /// Time step, in the scene's time unit (default: `smd_spec::default_dt`).
+    pub dt: Option<f64>,
+    /// Verlet-list skin, a length (default 0.6σ, the measured optimum of docs/PERFORMANCE.md).
+    pub skin: Option<f64>,
+    /// The window of 003 Eq. 26 over which the potential is switched off.
+    pub smoothing: Option<SmoothingSpec>,
+    /// Stop if the total energy leaves its value after equilibration by more than this
+    /// fraction of `K + |U|` (default 0.1; `inf` turns it off).
+    pub guard: Option<f64>,
+}
+
+/// The smoothing window of 003 Eq. 26.
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SmoothingSpec {
+    /// Where the switch starts (default 2.5σ).
+    pub r_l: Option<f64>,
+    /// Where the potential reaches zero: the cut-off (default 3σ).
+    pub r_u: Option<f64>,
 }
 
 fn default_tolerance() -> f64 {
@@ -279,7 +322,7 @@ pub struct SpeciesSpec {
 #[serde(deny_unknown_fields)]
 pub struct RattleSpec {
     /// The step `h` (default from the thermal atom speed and the shortest bond,
-    /// [`crate::flexible_scene::STEP_BOND_FRACTION`]).
+    /// `flexible_scene::STEP_BOND_FRACTION`).
     pub step: Option<f64>,
     /// Relative tolerance of the SHAKE and velocity iterations (default 1e-12).
     #[serde(default = "rattle_tolerance")]
@@ -555,7 +598,7 @@ pub struct SearchSpec {
     pub max_change: Option<f64>,
     /// Certified prediction: how far ahead one search call may jump the stretch that a Taylor
     /// model of the potential's effective coordinate proves free of crossings (a time; 0: off).
-    /// Default: [`crate::rods::DEFAULT_HORIZON_WINDOWS`] windows for potentials with a model.
+    /// Default: `rods::DEFAULT_HORIZON_WINDOWS` windows for potentials with a model.
     pub horizon: Option<f64>,
 }
 
@@ -759,7 +802,7 @@ pub struct OutputSpec {
     /// [`DEFAULT_SMOOTH_EVERY`]): each costs a sum over every pair within the cut-off.
     pub smooth_every: Option<u64>,
     /// The most bytes any one output may take in memory or on disk (default
-    /// [`crate::limits::DEFAULT_MAX_BYTES`]); see [`crate::limits`].
+    /// [`DEFAULT_MAX_BYTES`]); see the `limits` module.
     #[serde(default, deserialize_with = "opt_count")]
     pub max_bytes: Option<u64>,
 }
@@ -823,91 +866,33 @@ fn opt_count<'de, D: Deserializer<'de>>(d: D) -> Result<Option<u64>, D::Error> {
     count(d).map(Some)
 }
 
-impl Scene {
-    /// Reads and checks a scene file, applying `overrides` (`KEY=VALUE`) first.
-    ///
-    /// # Errors
-    /// Any [`SceneError`]; the message names the file, the key and the problem.
-    pub fn load(path: &Path, overrides: &[String]) -> Result<(Scene, PathBuf), SceneError> {
-        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
-            path: path.to_owned(),
-            source,
-        })?;
-        let scene = Scene::from_str_with(&text, overrides)?;
-        let base = path.parent().map(Path::to_owned).unwrap_or_default();
-        Ok((scene, base))
-    }
-
-    /// Parses and checks scene text, applying `overrides` (`KEY=VALUE`) first.
-    ///
-    /// # Errors
-    /// Any [`SceneError`].
-    pub fn from_str_with(text: &str, overrides: &[String]) -> Result<Scene, SceneError> {
-        let mut doc: toml::Table = text
-            .parse()
-            .map_err(|e: toml::de::Error| SceneError::Syntax(e.to_string().trim().to_owned()))?;
-        for arg in overrides {
-            Scene::apply_override(&mut doc, arg)?;
-        }
-        crate::site_scene::check_document(&doc)?;
-        let mut scene: Scene = serde_path_to_error::deserialize(toml::Value::Table(doc)).map_err(
-            |e: serde_path_to_error::Error<toml::de::Error>| {
-                let key = e.path().to_string();
-                // toml appends its own `in `key`` line; the path above is more precise.
-                let problem = e.inner().to_string();
-                let problem = problem
-                    .split("\nin `")
-                    .next()
-                    .unwrap_or("")
-                    .trim()
-                    .to_owned();
-                SceneError::Key { key, problem }
-            },
-        )?;
-        crate::site_scene::fill_masses(&mut scene);
-        scene.check()?;
-        scene.check_sweep_points(text, overrides)?;
-        Ok(scene)
-    }
-
-    /// The scene of one point of a `[sweep]` (issue 9): the key set to value `k`, the sweep
-    /// and chains tables removed.
-    ///
-    /// # Errors
-    /// The point's [`SceneError`], under the key `sweep.values[k]`.
-    pub fn sweep_point(
-        &self,
-        text: &str,
-        overrides: &[String],
-        k: usize,
-    ) -> Result<Scene, SceneError> {
-        let Some(sw) = &self.sweep else {
-            return Ok(self.clone());
+/// The stepped tables of a scene of spheres and square wells (the engine's potentials know
+/// nothing of scenes).
+impl crate::potential::Potentials {
+    /// From a checked scene (every pair of species has exactly one table).
+    pub fn from_scene(scene: &Scene) -> Self {
+        let index = |name: &str| {
+            scene
+                .species
+                .iter()
+                .position(|s| s.name == name)
+                .expect("checked")
         };
-        let mut o = overrides.to_vec();
-        o.push(format!("{}={}", sw.key, sw.values[k]));
-        o.push("sweep=".to_owned());
-        if self.chains.is_some() {
-            o.push("chains=".to_owned());
-        }
-        Scene::from_str_with(text, &o).map_err(|e| {
-            SceneError::invalid(
-                format!("sweep.values[{k}]"),
-                format!("with {} = {}: {e}", sw.key, sw.values[k]),
-            )
-        })
+        let tables: Vec<crate::potential::PairTable> = scene
+            .pair
+            .iter()
+            .map(|p| {
+                (
+                    (index(&p.species[0]), index(&p.species[1])),
+                    p.steps.clone(),
+                )
+            })
+            .collect();
+        Self::from_tables(scene.species.len(), &tables)
     }
+}
 
-    /// Every point of a sweep must be a valid scene.
-    fn check_sweep_points(&self, text: &str, overrides: &[String]) -> Result<(), SceneError> {
-        if let Some(sw) = &self.sweep {
-            for k in 0..sw.values.len() {
-                self.sweep_point(text, overrides, k)?;
-            }
-        }
-        Ok(())
-    }
-
+impl Scene {
     /// Applies one `KEY=VALUE` override to a parsed scene document. `KEY` is a dotted path
     /// (`run.events`, `species.0.mass`: an index picks an element of an array); `VALUE` is
     /// read as a TOML value (`0.5`, `[1, 1, 2]`, `"heap"`, `inf`), or as a string if it is not
@@ -984,7 +969,8 @@ impl Scene {
     }
 
     /// Checks the values against each other (the part serde cannot).
-    fn check(&self) -> Result<(), SceneError> {
+    /// The checks of the species, before the body kind's own.
+    pub(crate) fn check_species(&self) -> Result<(), SceneError> {
         if self.version != FORMAT_VERSION {
             return Err(SceneError::invalid(
                 "version",
@@ -1068,14 +1054,12 @@ impl Scene {
                 ),
             ));
         }
-        // Pair tables (issue 10: rigid site molecules have site–site tables instead).
-        if self.has_sites() {
-            crate::site_scene::check(self)?;
-        } else {
-            crate::site_scene::refuse_site_keys(self)?;
-            crate::flexible_scene::refuse_keys(self)?;
-            self.check_pair_tables()?;
-        }
+        Ok(())
+    }
+
+    /// The checks of the initial state, the run, its thermostat, searches and outputs: those
+    /// after the body kind's own (the order decides which error of a bad scene is reported).
+    pub(crate) fn check_rest(&self) -> Result<(), SceneError> {
         // Initial state.
         positive("init.temperature", self.init.temperature)?;
         match (self.init.positions, &self.init.file) {
@@ -1164,7 +1148,7 @@ impl Scene {
             positive("run.skin", skin)?;
         }
         if let Some(k) = r.rebase_events
-            && !(1..=crate::run::MAX_REBASE_EVENTS).contains(&k)
+            && !(1..=crate::simulation::MAX_REBASE_EVENTS).contains(&k)
         {
             return Err(SceneError::invalid(
                 "run.rebase_events",
@@ -1268,13 +1252,11 @@ impl Scene {
                 "must be at least 1",
             ));
         }
-        crate::limits::check(self)?;
-        crate::smd_engine::check(self)?;
-        self.check_issue_9()
+        Ok(())
     }
 
     /// The pair tables of spheres and rods, and the checks of their bodies.
-    fn check_pair_tables(&self) -> Result<(), SceneError> {
+    pub(crate) fn check_pair_tables(&self) -> Result<(), SceneError> {
         let names: Vec<&str> = self.species.iter().map(|s| s.name.as_str()).collect();
         let index = |k: usize, name: &str| -> Result<usize, SceneError> {
             names.iter().position(|&m| m == name).ok_or_else(|| {
@@ -1317,9 +1299,7 @@ impl Scene {
                     check_steps(k, &p.steps)?;
                 }
                 // Standard MD integrates the smooth potential itself (issue 8).
-                (Some(pot), true)
-                    if p.terraces.is_none() && self.engine == crate::smd_engine::Engine::Smd =>
-                {
+                (Some(pot), true) if p.terraces.is_none() && self.engine == Engine::Smd => {
                     check_potential(k, pot)?;
                 }
                 (Some(pot), true) => {
@@ -1359,7 +1339,7 @@ impl Scene {
     }
 
     /// Checks `[hmc]`, `[chains]` and `[sweep]`.
-    fn check_issue_9(&self) -> Result<(), SceneError> {
+    pub(crate) fn check_issue_9(&self) -> Result<(), SceneError> {
         if let Some(h) = &self.hmc {
             positive("hmc.segment_time", h.segment_time)?;
             if h.segments == 0 {
@@ -1859,14 +1839,14 @@ pub(crate) fn check_steps_at(key: &str, steps: &[[f64; 2]]) -> Result<(), SceneE
                 "the energy step is 0, which changes nothing: remove the step",
             ));
         }
-        if dv.is_finite() && dv.abs() > crate::limits::MAX_STEP_ENERGY {
+        if dv.is_finite() && dv.abs() > MAX_STEP_ENERGY {
             return Err(SceneError::invalid(
                 here,
                 format!(
                     "the energy step {} is beyond any physical energy (at most {} in \
                      magnitude, so that sums of energies stay finite); a hard core is inf",
-                    crate::limits::short(dv),
-                    crate::limits::short(crate::limits::MAX_STEP_ENERGY)
+                    crate::output::short(dv),
+                    crate::output::short(MAX_STEP_ENERGY)
                 ),
             ));
         }

@@ -44,7 +44,11 @@ use crate::sum::Compensated;
 // re-basing of the time origin, pausing there, and the energy of a configuration from its
 // distances. A child module, so that it reaches the loop's private state.
 mod state;
-pub use state::{BodyRecord, SimState, StateError, TrueEnergy, true_level};
+pub use state::{BodyRecord, SimState, StateError, TrueEnergy};
+
+/// Most events between re-basings: generations are `u32` and every event list is rebuilt at a
+/// re-basing, so no generation can wrap round while an event predicted with it waits.
+pub const MAX_REBASE_EVENTS: u64 = 1 << 31;
 
 /// Why a simulation could not go on.
 #[derive(Debug, thiserror::Error)]

@@ -20,8 +20,9 @@ use crate::potential::Potentials;
 use crate::scene::{
     ImpulseRuleSpec, MoleculeSpec, Orientations, Positions, Scene, SceneError, SearchMethodSpec,
 };
-use crate::sites::{ImpulseRule, MoleculeType, SiteAtom, Sites, draw_body_omega, molecules};
-use crate::terraced::{SearchMethod, SearchSettings};
+use crate::search::{SearchMethod, SearchSettings};
+use crate::site_pairs::SiteAtom;
+use crate::sites::{ImpulseRule, MoleculeType, Sites, draw_body_omega, molecules};
 
 /// Default `search.max_step` in units of the shortest length of the site–site tables over the
 /// fastest thermal site speed (see [`search_settings`]).
@@ -110,7 +111,7 @@ pub(crate) fn refuse_site_keys(scene: &Scene) -> Result<(), SceneError> {
 ///
 /// # Errors
 /// A species that is not a molecule, or a shipped molecule that refuses its parameters.
-fn atoms_of(scene: &Scene) -> Result<(Vec<String>, Vec<Vec<SiteAtom>>), SceneError> {
+pub(crate) fn atoms_of(scene: &Scene) -> Result<(Vec<String>, Vec<Vec<SiteAtom>>), SceneError> {
     let mut kinds: Vec<String> = Vec::new();
     let mut index = |name: &str| -> u32 {
         if let Some(k) = kinds.iter().position(|m| m == name) {
@@ -259,9 +260,7 @@ pub(crate) fn check(scene: &Scene) -> Result<(), SceneError> {
     let (kinds, atoms) = atoms_of(scene)?;
     let flexible = scene.has_bonds();
     let mut types = Vec::new();
-    if flexible {
-        crate::flexible_scene::types_of(scene, &atoms)?;
-    } else if scene.rattle.is_some() {
+    if !flexible && scene.rattle.is_some() {
         return Err(SceneError::invalid(
             "rattle",
             "only used by semi-flexible molecules: give the species `bonds`",
@@ -328,7 +327,8 @@ pub(crate) fn check(scene: &Scene) -> Result<(), SceneError> {
         }
     }
     if flexible {
-        return crate::flexible_scene::check_rest(scene);
+        // The molecules' bonds and RATTLE keys: `flexible_scene::check`.
+        return Ok(());
     }
     // Impulse rule.
     if scene

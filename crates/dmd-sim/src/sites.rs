@@ -70,32 +70,19 @@ use rand::{RngExt, SeedableRng};
 use rand_distr::{Distribution, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;
 use rigid_free::{FreeMotion, Moments};
-use root_search::{Adaptive, Crossing, Grid, Method, SearchError, SearchState};
+use root_search::{Adaptive, Crossing, Grid, Method, SearchError};
 
 use crate::event::{Boundary, Kind};
-use crate::model::{Executed, PairClass, PairModel, PairSetupError};
+use crate::model::{Executed, PairClass, PairModel, PairSetupError, Report};
 use crate::pair_state::{SavedSearches, SiteLevels};
-use crate::potential::{Level, Potentials};
-use crate::terraced::{SearchMethod, SearchSettings, SearchStats};
+use crate::potential::Potentials;
+use crate::search::{SearchMethod, SearchSettings, SearchStats, bracket, check_settings};
+use crate::site_pairs::{Band, SITE_OVERLAP_TOLERANCE, SiteAtom, SiteSearch};
 
 /// Moments within this fraction of the largest are made equal (and a smallest moment below it
 /// is zero: a linear molecule). Far above the round-off of the Jacobi rotations (1e-15), far
 /// below anything physical.
 pub const MOMENT_SNAP: f64 = 1e-10;
-
-/// Relative tolerance on squared site distances below which an overlap counts as round-off.
-pub const SITE_OVERLAP_TOLERANCE: f64 = 1e-9;
-
-/// One atom of a molecule type.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SiteAtom {
-    /// Position in the frame the molecule is described in (any origin, any orientation).
-    pub position: DVec3,
-    /// Mass.
-    pub mass: f64,
-    /// Site species (indexes the site–site potential table).
-    pub species: u32,
-}
 
 /// Why a molecule type or a site model could not be built.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -533,19 +520,6 @@ impl Rotation {
     }
 }
 
-/// What one site pair's search has come to.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) enum SiteSearch {
-    /// Nothing can happen in its bracket.
-    Done,
-    /// Its event.
-    Root(f64, Boundary),
-    /// Stopped at the end of its window.
-    Suspended(SearchState),
-    /// Its bracket starts at `at` and ends at `end`.
-    Deferred { at: f64, end: f64 },
-}
-
 /// What a prediction left for its pair.
 #[derive(Clone, Debug, PartialEq)]
 enum Pending {
@@ -597,6 +571,11 @@ pub struct Sites {
 }
 
 impl Sites {
+    /// Counters of this model's root searches so far.
+    pub fn search_stats(&self) -> SearchStats {
+        self.stats
+    }
+
     /// Molecules of `types` interacting through the site–site `potentials` (over the site
     /// species); body `i` is of type `body_type[i]`, with orientation `orientations[i]` (body
     /// → lab) and lab angular velocity `omegas[i]` at time `t0`; searches with `settings`, the
@@ -675,7 +654,7 @@ impl Sites {
                 })?;
             rotations.push(Rotation { motion, t: t0 });
         }
-        check_settings(&settings)?;
+        check_settings(&settings).map_err(SitesError::Search)?;
         let n = body_type.len();
         Ok(Sites {
             types,
@@ -1083,79 +1062,6 @@ impl Sites {
     }
 }
 
-pub(crate) fn check_settings(s: &SearchSettings) -> Result<(), SitesError> {
-    Adaptive::new(s.max_step).map_err(SitesError::Search)?;
-    if let SearchMethod::Grid { threshold } = s.method {
-        Grid::new(s.max_step, threshold).map_err(SitesError::Search)?;
-    }
-    if s.window.is_nan() || s.window <= 0.0 {
-        return Err(SitesError::Search(SearchError::BadSetting {
-            name: "window",
-            value: s.window,
-            why: "> 0",
-        }));
-    }
-    if !(0.0..0.5).contains(&s.jitter) {
-        return Err(SitesError::Search(SearchError::BadSetting {
-            name: "jitter",
-            value: s.jitter,
-            why: "in [0, 0.5)",
-        }));
-    }
-    if let Some(v) = s.verify_step {
-        Grid::new(v, f64::INFINITY).map_err(SitesError::Search)?;
-    }
-    Ok(())
-}
-
-/// The band of a site pair's level in squared distance.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct Band {
-    /// `r_in²` (`−1`: none).
-    pub(crate) lo: f64,
-    /// `r_out²` (`+∞`: none).
-    pub(crate) hi: f64,
-    /// `1 / (hi − lo)` when both exist, else 0.
-    inv: f64,
-    /// A squared length for tolerances.
-    pub(crate) scale: f64,
-}
-
-impl Band {
-    pub(crate) fn of(l: &Level) -> Band {
-        let both = l.inner2 > 0.0 && l.outer2 < f64::INFINITY;
-        Band {
-            lo: l.inner2,
-            hi: l.outer2,
-            inv: if both {
-                1.0 / (l.outer2 - l.inner2)
-            } else {
-                0.0
-            },
-            scale: if l.outer2 < f64::INFINITY {
-                l.outer2
-            } else {
-                l.inner2
-            },
-        }
-    }
-
-    /// `g` and `ġ` (module documentation) from `d²` and its rate.
-    #[inline(always)]
-    pub(crate) fn indicator(&self, d2: f64, rate: f64) -> (f64, f64) {
-        if self.inv > 0.0 {
-            (
-                (d2 - self.lo) * (self.hi - d2) * self.inv,
-                rate * (self.hi + self.lo - 2.0 * d2) * self.inv,
-            )
-        } else if self.hi == f64::INFINITY {
-            (d2 - self.lo, rate)
-        } else {
-            (self.hi - d2, -rate)
-        }
-    }
-}
-
 /// Poses of the two molecules at the last few sample times: the site pairs of one molecule
 /// pair share their samples on a grid (and their first sample always).
 #[derive(Default)]
@@ -1203,39 +1109,6 @@ impl SiteGeometry {
         let r = self.dr + self.dv * (t - self.now) + di - dj;
         let u = self.dv + wi.cross(di) - wj.cross(dj);
         (r.length_squared(), 2.0 * r.dot(u))
-    }
-}
-
-/// The times `(enter, exit)` from now during which `|dr + dv t|² ≤ R²` (`enter = 0` for a pair
-/// already inside), or `None` if the pair never comes within `R` from now on; each root in the
-/// form without cancellation.
-#[inline]
-pub(crate) fn bracket(dr: DVec3, dv: DVec3, radius2: f64) -> Option<(f64, f64)> {
-    let r2 = dr.length_squared();
-    let b = dr.dot(dv);
-    let c = r2 - radius2;
-    let v2 = dv.length_squared();
-    if c > 0.0 {
-        if b >= 0.0 {
-            return None;
-        }
-        let disc = b * b - v2 * c;
-        if disc <= 0.0 {
-            return None;
-        }
-        let q = -b + disc.sqrt();
-        Some((c / q, q / v2))
-    } else {
-        if v2 == 0.0 {
-            return Some((0.0, f64::INFINITY));
-        }
-        let sq = (b * b - v2 * c).max(0.0).sqrt();
-        let exit = if b > 0.0 {
-            -c / (b + sq)
-        } else {
-            (-b + sq) / v2
-        };
-        Some((0.0, exit))
     }
 }
 
@@ -1500,7 +1373,7 @@ impl PairModel for Sites {
                 - ohi * self.types[thi].sites[sp.b as usize])
                 .length();
             let held = stored.map_or(0, |l| l[k] as usize);
-            let level = crate::simulation::true_level(pot, held, d);
+            let level = pot.true_level(held, d);
             e += pot.levels()[level].energy;
         }
         (0, e)
@@ -1649,8 +1522,10 @@ impl PairModel for Sites {
         Some(self.pose(i, now).0.x_axis)
     }
 
-    fn search_stats(&self) -> Option<SearchStats> {
-        Some(self.stats)
+    fn report(&self) -> Report {
+        let mut r = Report::default();
+        self.stats.report_into(&mut r);
+        r
     }
 
     fn scale_rotations(&mut self, now: f64, factor: f64) {
@@ -1810,6 +1685,7 @@ pub mod molecules {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::potential::Level;
 
     fn atom(x: f64, y: f64, z: f64, mass: f64) -> SiteAtom {
         SiteAtom {

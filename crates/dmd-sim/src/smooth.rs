@@ -20,8 +20,8 @@ use glam::DVec3;
 use potential::{PairGeometry, PairPotential, Smoothed};
 use serde::{Deserialize, Serialize};
 
-use crate::hmc::{BlockEstimate, block_average};
-use crate::observable::{for_each_pair, wrap};
+use crate::block::{BlockEstimate, block_average};
+use crate::pairs::{for_each_pair, wrap};
 use crate::simulation::View;
 use crate::sum::Compensated;
 
@@ -240,73 +240,4 @@ impl Samples {
             pressure_smooth: smooth.then(|| block_average(&smooth_col(&|r| r.pressure_smooth))),
         }
     }
-}
-
-impl crate::scene::Scene {
-    /// Whether the event-driven engine runs this scene as terraced rods or Gay–Berne bodies
-    /// (`Terraced<P>`), whose smooth potential the estimators evaluate.
-    pub fn has_terraced_smooth_potential(&self) -> bool {
-        !self.has_bonds()
-            && !self.has_sites()
-            && self
-                .pair
-                .first()
-                .and_then(|p| p.potential)
-                .is_some_and(|p| p.is_anisotropic())
-    }
-
-    /// Whether a run of this scene evaluates the smooth estimators: `output.smooth_estimators`
-    /// (default on), a terraced smooth potential and a sampling interval.
-    pub fn wants_smooth_estimators(&self) -> bool {
-        self.output.smooth_estimators.unwrap_or(true)
-            && self.output.sample_interval.is_some()
-            && self.has_terraced_smooth_potential()
-    }
-}
-
-/// The estimator of a terraced scene (in internal units) over its pair tables, with the
-/// smoothing window the smd engine would use for each pair (`[smd] smoothing`, else its
-/// default), or `None` when the scene does not want one or its cut-off does not fit the box
-/// (minimum image needs `r_u` below half the shortest side; an explicit
-/// `output.smooth_estimators = true` then is an error).
-///
-/// # Errors
-/// [`SceneError::Invalid`](crate::scene::SceneError) naming `output.smooth_estimators` or
-/// `smd.smoothing`.
-pub fn estimator<P: PairPotential + Clone + std::fmt::Debug + Send + 'static>(
-    scene: &crate::scene::Scene,
-    lengths: DVec3,
-    tables: &[crate::terraced::PairTable<P>],
-) -> Result<Option<Box<dyn Evaluate>>, crate::scene::SceneError> {
-    use crate::scene::SceneError;
-    if !scene.wants_smooth_estimators() {
-        return Ok(None);
-    }
-    let mut pots = Vec::with_capacity(tables.len());
-    let mut cutoff: f64 = 0.0;
-    for (k, ((a, b), t)) in tables.iter().enumerate() {
-        let spec = scene.pair[k]
-            .potential
-            .expect("terraced pairs have a potential");
-        let (r_l, r_u) = crate::smd_engine::window(scene, &spec);
-        let p = Smoothed::new(t.potential().clone(), r_l, r_u)
-            .map_err(|e| SceneError::invalid("smd.smoothing", e.to_string()))?;
-        cutoff = cutoff.max(r_u);
-        pots.push(((*a, *b), p));
-    }
-    let half = 0.5 * lengths.min_element();
-    if cutoff >= half {
-        return match scene.output.smooth_estimators {
-            Some(true) => Err(SceneError::invalid(
-                "output.smooth_estimators",
-                format!(
-                    "the smooth potential's cut-off r_u = {cutoff} reaches half the shortest box \
-                     side {half:.6}: a body would interact with two images of another; use more \
-                     bodies or a smaller smd.smoothing.r_u"
-                ),
-            )),
-            _ => Ok(None),
-        };
-    }
-    Ok(Some(Box::new(Estimator::new(scene.species.len(), pots))))
 }

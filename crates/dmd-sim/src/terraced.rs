@@ -50,120 +50,9 @@ use rigid_free::LinearRotor;
 use root_search::{Adaptive, Crossing, Grid, Method, SearchError, SearchState};
 
 use crate::event::{Boundary, Kind};
-use crate::model::{Executed, PairClass, PairModel, PairSetupError};
+use crate::model::{Executed, PairClass, PairModel, PairSetupError, Report};
 use crate::pair_state::{PairStates, SavedSearches};
-
-/// How the event times of a pair are searched.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum SearchMethod {
-    /// The adaptive search with cubic Hermite interpolation of 003 §III (maximum step
-    /// [`SearchSettings::max_step`]).
-    Adaptive,
-    /// The uniform grid of 000 §III.A with spacing [`SearchSettings::max_step`]; extrema are
-    /// examined where `|g|` at a grid point is below `threshold` (energy units).
-    Grid {
-        /// The grazing threshold.
-        threshold: f64,
-    },
-}
-
-/// The accuracy and cost knobs of the root searches.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SearchSettings {
-    /// Adaptive or grid search.
-    pub method: SearchMethod,
-    /// The maximum step of the adaptive search, or the grid spacing (003 §V.A: 4 fs).
-    pub max_step: f64,
-    /// How far one search call may go before it stops and schedules a virtual event (003 §V.A:
-    /// 4 fs); `+∞` searches each bracket to its end in one call (no virtual events).
-    pub window: f64,
-    /// Each search call shortens its step by a random fraction in `[0, jitter)`, so that
-    /// virtual events of different pairs do not coincide (003 §V.A).
-    pub jitter: f64,
-    /// Validation mode: every search interval is searched again on a uniform grid of this
-    /// spacing that examines every extremum (`None`: off).
-    pub verify_step: Option<f64>,
-    /// Each call's maximum step is also at most this fraction of the terrace's width divided
-    /// by `|U̇|` at the call's first sample (never below 1 % of `max_step`): steps follow the
-    /// speed of `U`, so an excursion across a level and back within one maximum step is still
-    /// sampled. (The indicator's own slope cannot size the step: it vanishes mid-terrace.)
-    /// `+∞`: off, the paper's search.
-    pub max_change: f64,
-    /// Certified prediction (`potential::certify`): before each search call, jump the
-    /// stretch of free flight in which a Taylor model of the potential's effective coordinate
-    /// proves that `U` stays inside its band, up to this far ahead; a pair still safe there
-    /// gets a virtual event at that time, having evaluated nothing. 0: off (and for potentials
-    /// without a Taylor model, whatever its value).
-    pub horizon: f64,
-}
-
-impl SearchSettings {
-    /// The paper's settings (003 §V.A) with maximum step `max_step` (4 fs there): the adaptive
-    /// search, a window equal to the step, 1 % jitter, no verification.
-    pub fn paper(max_step: f64) -> Self {
-        SearchSettings {
-            method: SearchMethod::Adaptive,
-            max_step,
-            window: max_step,
-            jitter: 0.01,
-            verify_step: None,
-            max_change: f64::INFINITY,
-            horizon: 0.0,
-        }
-    }
-}
-
-/// Counters of the root searches of a run.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-pub struct SearchStats {
-    /// Search calls (started or resumed).
-    pub searches: u64,
-    /// Evaluations of `U`, force and torques inside searches.
-    pub evaluations: u64,
-    /// Searches that ended at a root.
-    pub roots: u64,
-    /// Searches that stopped at the end of their window (a virtual event scheduled).
-    pub suspended: u64,
-    /// Virtual events scheduled for the moment a pair comes within reach (no evaluation).
-    pub deferred: u64,
-    /// Searches that started with the pair's `U` off its stored terrace by more than round-off:
-    /// the trace of an event missed earlier.
-    pub off_terrace: u64,
-    /// Executed events whose `U` was not at the predicted level beyond round-off.
-    pub misfits: u64,
-    /// Searches that failed (a non-finite indicator: a broken invariant); the pair got no event.
-    pub failures: u64,
-    /// Searches checked against the fine grid (validation mode).
-    pub verified: u64,
-    /// Searches in whose interval the fine grid found an earlier root (missed events).
-    pub verify_misses: u64,
-    /// Taylor models of certified prediction evaluated (each proves a stretch or stops).
-    #[serde(default)]
-    pub taylor_models: u64,
-    /// Search calls that jumped a proven-safe stretch.
-    #[serde(default)]
-    pub certified_jumps: u64,
-}
-
-impl SearchStats {
-    /// The counts since `earlier` (a snapshot of the same run).
-    pub fn since(&self, earlier: &SearchStats) -> SearchStats {
-        SearchStats {
-            searches: self.searches - earlier.searches,
-            evaluations: self.evaluations - earlier.evaluations,
-            roots: self.roots - earlier.roots,
-            suspended: self.suspended - earlier.suspended,
-            deferred: self.deferred - earlier.deferred,
-            off_terrace: self.off_terrace - earlier.off_terrace,
-            misfits: self.misfits - earlier.misfits,
-            failures: self.failures - earlier.failures,
-            verified: self.verified - earlier.verified,
-            verify_misses: self.verify_misses - earlier.verify_misses,
-            taylor_models: self.taylor_models - earlier.taylor_models,
-            certified_jumps: self.certified_jumps - earlier.certified_jumps,
-        }
-    }
-}
+use crate::search::{SearchMethod, SearchSettings, SearchStats, bracket};
 
 /// One rod's free rotation since its last change at time `t`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -522,6 +411,11 @@ pub struct Terraced<P> {
 }
 
 impl<P: PairPotential> Terraced<P> {
+    /// Counters of this model's root searches so far.
+    pub fn search_stats(&self) -> SearchStats {
+        self.stats
+    }
+
     /// Rods of `species` with terraced pair potentials `pairs` (every unordered pair of
     /// species once); body `i` is of species `body_species[i]` (as the loop's bodies) with
     /// initial axis `axes[i]` and lab angular velocity `omegas[i]` (its component along the
@@ -1195,8 +1089,10 @@ impl<P: PairPotential> PairModel for Terraced<P> {
         Some(self.rods[i as usize].axis(now))
     }
 
-    fn search_stats(&self) -> Option<SearchStats> {
-        Some(self.stats)
+    fn report(&self) -> Report {
+        let mut r = Report::default();
+        self.stats.report_into(&mut r);
+        r
     }
 
     // ----- hybrid Monte Carlo and checkpoints (009) -------------------------------------------
@@ -1283,7 +1179,7 @@ impl<P: PairPotential> PairModel for Terraced<P> {
             x.extend_from_slice(&r.rotor.to_parts());
             x.push(r.t);
         }
-        for c in stats_counts(&self.stats) {
+        for c in self.stats.counts() {
             // Each counter as two exact 32-bit halves.
             x.push((c >> 32) as f64);
             x.push((c & 0xffff_ffff) as f64);
@@ -1320,7 +1216,7 @@ impl<P: PairPotential> PairModel for Terraced<P> {
             c[k] = (h[0] as u64) << 32 | h[1] as u64;
         }
         self.rods = restored;
-        self.stats = stats_from_counts(c);
+        self.stats = SearchStats::from_counts(c);
         Ok(())
     }
 
@@ -1342,40 +1238,6 @@ const ROD_NUMBERS: usize = 11;
 /// Numbers of the search counters in [`PairModel::extra_state`] (two per counter).
 const STATS_NUMBERS: usize = 24;
 
-fn stats_counts(s: &SearchStats) -> [u64; STATS_NUMBERS / 2] {
-    [
-        s.searches,
-        s.evaluations,
-        s.roots,
-        s.suspended,
-        s.deferred,
-        s.off_terrace,
-        s.misfits,
-        s.failures,
-        s.verified,
-        s.verify_misses,
-        s.taylor_models,
-        s.certified_jumps,
-    ]
-}
-
-fn stats_from_counts(c: [u64; STATS_NUMBERS / 2]) -> SearchStats {
-    SearchStats {
-        searches: c[0],
-        evaluations: c[1],
-        roots: c[2],
-        suspended: c[3],
-        deferred: c[4],
-        off_terrace: c[5],
-        misfits: c[6],
-        failures: c[7],
-        verified: c[8],
-        verify_misses: c[9],
-        taylor_models: c[10],
-        certified_jumps: c[11],
-    }
-}
-
 /// SplitMix64's finaliser: a well-mixed 64-bit hash.
 fn mix(mut z: u64) -> u64 {
     z = z.wrapping_add(0x9e37_79b9_7f4a_7c15);
@@ -1388,41 +1250,6 @@ impl<P> Terraced<P> {
     /// Species of every body.
     fn body_species(&self) -> impl Iterator<Item = u32> + '_ {
         self.body_species.iter().copied()
-    }
-}
-
-/// The times `(enter, exit)` from now during which `|dr + dv t|² ≤ R²` (`enter = 0` for a pair
-/// already inside), or `None` if the pair never comes within `R` from now on. Each root is
-/// taken in the form without cancellation, as `root_search::sphere_window` (the tests compare
-/// them), with a quick exit for receding pairs outside and no square root before it.
-#[inline(always)]
-fn bracket(dr: DVec3, dv: DVec3, radius2: f64) -> Option<(f64, f64)> {
-    let r2 = dr.length_squared();
-    let b = dr.dot(dv);
-    let c = r2 - radius2;
-    if c > 0.0 {
-        if b >= 0.0 {
-            return None;
-        }
-        let v2 = dv.length_squared();
-        let disc = b * b - v2 * c;
-        if disc <= 0.0 {
-            return None;
-        }
-        let q = -b + disc.sqrt();
-        Some((c / q, q / v2))
-    } else {
-        let v2 = dv.length_squared();
-        if v2 == 0.0 {
-            return Some((0.0, f64::INFINITY));
-        }
-        let sq = (b * b - v2 * c).max(0.0).sqrt();
-        let exit = if b > 0.0 {
-            -c / (b + sq)
-        } else {
-            (-b + sq) / v2
-        };
-        Some((0.0, exit))
     }
 }
 

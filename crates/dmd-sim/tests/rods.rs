@@ -4,8 +4,9 @@
 use collide::Particle;
 use dmd_sim::model::{PairModel, Stepped};
 use dmd_sim::potential::Potentials;
+use dmd_sim::search::SearchSettings;
 use dmd_sim::simulation::{LoopSettings, NoSampler, Simulation, Stop};
-use dmd_sim::terraced::{PairTerraces, RodSpecies, SearchSettings, Terraced, radial_steps};
+use dmd_sim::terraced::{PairTerraces, RodSpecies, Terraced, radial_steps};
 use event_queue::{BoundedQueue, LazyQueue, Ticket};
 use glam::DVec3;
 use potential::{LennardJones, LjRod, PairPotential, TerraceMap, TerraceOptions, profile};
@@ -85,7 +86,7 @@ fn smoke_rods_conserve_energy_and_momentum() {
     let e1 = sim.kinetic_energy() + sim.potential_energy();
     let (p1, _) = sim.momentum_and_mass();
     let c = sim.counters();
-    let st = sim.model().search_stats().unwrap();
+    let st = sim.model().search_stats();
     eprintln!("{c:?}\n{st:?}\n{:?} E {e0} -> {e1}", sim.anomalies());
     assert!((e1 - e0).abs() < 1e-10 * e0.abs().max(1.0));
     assert!((p1 - p0).length() < 1e-12);
@@ -302,7 +303,7 @@ fn head_on_encounter_comes_out_as_it_went_in() {
         assert!((k1 - k0).abs() < 1e-12 * k0, "{speed}: {k0} -> {k1}");
         let (p, _) = sim.momentum_and_mass();
         assert!(p.length() < 1e-14);
-        assert_eq!(sim.model().search_stats().unwrap().misfits, 0);
+        assert_eq!(sim.model().search_stats().misfits, 0);
         assert_eq!(sim.anomalies().total(), 0);
     }
 }
@@ -374,7 +375,7 @@ fn verification_catches_the_misses_of_a_coarse_grid() {
     let mut misses = Vec::new();
     for search in [
         SearchSettings {
-            method: dmd_sim::terraced::SearchMethod::Grid { threshold: 0.0 },
+            method: dmd_sim::search::SearchMethod::Grid { threshold: 0.0 },
             max_step: 0.03,
             verify_step: Some(0.0005),
             ..SearchSettings::paper(0.03)
@@ -392,7 +393,7 @@ fn verification_catches_the_misses_of_a_coarse_grid() {
             Simulation::new(DVec3::splat(l), &r, &v, &vec![0; n], model, s).unwrap();
         sim.run(Stop::Events(30_000), &mut NoSampler, &mut |_| {})
             .unwrap();
-        let st = sim.model().search_stats().unwrap();
+        let st = sim.model().search_stats();
         assert_eq!(st.verified, st.searches);
         misses.push(st.verify_misses);
     }
@@ -435,7 +436,7 @@ fn certified_prediction_misses_nothing_and_changes_no_event() {
         let e1 = sim.kinetic_energy() + sim.potential_energy();
         assert!((e1 - e0).abs() < 1e-12 * e0.abs(), "{e0} -> {e1}");
         assert_eq!(sim.anomalies().total(), 0);
-        let st = sim.model().search_stats().unwrap();
+        let st = sim.model().search_stats();
         (st, sim.counters(), sim.positions())
     };
     let (plain, _, _) = run(0.0, Stop::Time(1.5));

@@ -5,9 +5,10 @@ use std::path::Path;
 
 use dmd_sim::run::{Quiet, Summary, run_scene};
 use dmd_sim::scene::Scene;
+use dmd_sim::search::SearchSettings;
 use dmd_sim::simulation::{LoopSettings, Sampler, Simulation, Stop, View};
 use dmd_sim::smooth::{Estimator, Evaluate};
-use dmd_sim::terraced::{PairTerraces, RodSpecies, SearchSettings, Terraced};
+use dmd_sim::terraced::{PairTerraces, RodSpecies, Terraced};
 use event_queue::{BoundedQueue, LazyQueue, Ticket};
 use glam::DVec3;
 use potential::{LjRod, PairGeometry, PairPotential, Smoothed, TerraceMap, TerraceOptions};

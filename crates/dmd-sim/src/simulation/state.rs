@@ -28,14 +28,9 @@ use crate::cell::CellGrid;
 use crate::event::EventLists;
 use crate::model::PairModel;
 use crate::neighbour::{self, NeighbourLists};
-use crate::potential::StepPotential;
 use crate::schedule::Scheduler;
 use crate::simulation::{Andersen, Anomalies, Counters, LoopSettings};
 use crate::sum::Compensated;
-
-/// Relative distance within which a stored level is kept at its boundary (round-off of an
-/// event executed at that boundary), as in [`Simulation::check`].
-const BOUNDARY_TOLERANCE: f64 = 1e-9;
 
 /// One body's record.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -139,23 +134,6 @@ impl TrueEnergy {
     pub fn total(&self) -> f64 {
         self.kinetic + self.potential
     }
-}
-
-/// The level of a pair at distance `d` whose stored level is `stored`: the stored level if the
-/// distance is on it or within round-off of its boundary, else the level of the distance.
-pub fn true_level(pot: &StepPotential, stored: usize, d: f64) -> usize {
-    let expected = pot.level_at(d);
-    if expected == stored {
-        return stored;
-    }
-    let n = pot.radii().len();
-    if stored <= n && expected.abs_diff(stored) == 1 {
-        let at = pot.radii()[n - stored.max(expected)];
-        if (d - at).abs() <= BOUNDARY_TOLERANCE * at {
-            return stored;
-        }
-    }
-    expected
 }
 
 impl<M, S> Simulation<M, S>
@@ -704,24 +682,24 @@ fn check_fits<M: PairModel>(
 
 #[cfg(test)]
 mod tests {
-    use super::*;
+    use crate::potential::StepPotential;
 
     #[test]
     fn stored_levels_are_kept_only_within_round_off_of_their_boundary() {
         // Hard core 1, shoulder to 1.2, well to 1.5: levels 0 (out), 1 (1.2–1.5), 2 (1–1.2),
         // 3 (core).
         let pot = StepPotential::new(&[[1.0, f64::INFINITY], [1.2, 0.5], [1.5, -1.0]]);
-        assert_eq!(true_level(&pot, 1, 1.3), 1);
+        assert_eq!(pot.true_level(1, 1.3), 1);
         // Just outside 1.5 after an inward crossing executed there: still level 1.
-        assert_eq!(true_level(&pot, 1, 1.5 * (1.0 + 1e-12)), 1);
+        assert_eq!(pot.true_level(1, 1.5 * (1.0 + 1e-12)), 1);
         // Clearly outside: the distance wins (a missed outward step).
-        assert_eq!(true_level(&pot, 1, 1.6), 0);
+        assert_eq!(pot.true_level(1, 1.6), 0);
         // Two levels away is never round-off.
-        assert_eq!(true_level(&pot, 0, 1.1), 2);
+        assert_eq!(pot.true_level(0, 1.1), 2);
         // At contact by round-off: not an overlap.
-        assert_eq!(true_level(&pot, 2, 1.0 - 1e-13), 2);
+        assert_eq!(pot.true_level(2, 1.0 - 1e-13), 2);
         // Inside the core by more: the core level (+∞ energy).
-        assert_eq!(true_level(&pot, 2, 0.99), 3);
+        assert_eq!(pot.true_level(2, 0.99), 3);
         assert_eq!(pot.levels()[3].energy, f64::INFINITY);
     }
 }
