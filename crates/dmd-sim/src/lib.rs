@@ -48,47 +48,21 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
-pub mod block;
-pub mod body;
-pub mod cell;
-pub mod chains;
-pub mod checkpoint;
-pub mod event;
-// Issue 10, second half: semi-flexible molecules (RATTLE between events).
-pub mod flexible;
-pub mod flexible_scene;
-pub mod hmc;
-pub mod init;
-pub mod interrupt;
-pub mod limits;
-mod load;
-pub mod model;
-pub mod neighbour;
-pub mod observable;
-pub mod outdir;
-pub mod output;
-pub mod pair_state;
-mod pairs;
-pub mod potential;
-pub mod reference;
-mod reporting;
-pub mod rods;
-pub mod run;
-pub mod scene;
-pub mod search;
-// Issue 10: rigid site-based molecules (seed 000).
-pub mod schedule;
-pub mod simulation;
-pub mod site_pairs;
-pub mod site_scene;
-pub mod sites;
-// Issue 8: the standard-MD engine on the same scenes.
-pub mod smd_engine;
-pub mod smd_spec;
-pub mod smooth;
-pub mod sum;
-pub mod terraced;
-pub mod units;
+// The layers, each importing only those before it (checked by `tests/layers.rs`): engine ←
+// models ← analysis ← config ← driver ← the `dmd` binary.
+mod analysis;
+mod config;
+mod driver;
+mod engine;
+mod models;
+
+pub use analysis::{block, observable, output, reference, smooth};
+pub use config::{flexible_scene, init, limits, rods, scene, site_scene, smd_spec, units};
+pub use driver::{chains, checkpoint, hmc, interrupt, outdir, run, smd_engine};
+pub use engine::{
+    body, cell, event, model, neighbour, pair_state, potential, schedule, simulation, sum,
+};
+pub use models::{flexible, search, site_pairs, sites, terraced};
 
 /// The README's example, compiled and run as a doctest so it cannot go stale.
 #[cfg(doctest)]

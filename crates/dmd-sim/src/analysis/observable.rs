@@ -1,0 +1,410 @@
+//! Observables sampled at fixed intervals of simulated time: radial distribution function (of
+//! the centres), mean-square displacement, velocity autocorrelation, the long-axis
+//! orientational autocorrelation of rods, pressure and energy time series.
+//!
+//! Sampling reads positions `r + v (t − t_i)` without touching the bodies (no invalidation):
+//! asking for observables does not change the trajectory, and nothing here runs unless asked.
+
+use glam::DVec3;
+
+use crate::analysis::pairs::{for_each_pair, wrap};
+use crate::engine::simulation::{Sampler, View};
+
+/// Radial distribution function `g(r)` of all pairs.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct Rdf {
+    every: u64,
+    seen: u64,
+    r_max: f64,
+    width: f64,
+    counts: Vec<u64>,
+    samples: u64,
+    n: usize,
+    volume: f64,
+}
+
+impl Rdf {
+    /// `bins` bins up to `r_max` (at most half the smallest box side), evaluated at every
+    /// `every`-th sample.
+    pub fn new(bins: usize, r_max: f64, every: u64) -> Self {
+        Rdf {
+            every: every.max(1),
+            seen: 0,
+            r_max,
+            width: r_max / bins as f64,
+            counts: vec![0; bins],
+            samples: 0,
+            n: 0,
+            volume: 0.0,
+        }
+    }
+
+    fn sample(&mut self, view: &View<'_>) {
+        self.seen += 1;
+        if !(self.seen - 1).is_multiple_of(self.every) {
+            return;
+        }
+        let n = view.bodies.len();
+        let pos: Vec<DVec3> = (0..n)
+            .map(|i| wrap(view.position(i), view.lengths))
+            .collect();
+        let l = view.lengths;
+        self.n = n;
+        self.volume = l.x * l.y * l.z;
+        self.samples += 1;
+        let r2max = self.r_max * self.r_max;
+        let inv_w = 1.0 / self.width;
+        let counts = &mut self.counts;
+        for_each_pair(&pos, l, self.r_max, |_, _, d| {
+            let r2 = d.length_squared();
+            if r2 < r2max {
+                let k = (r2.sqrt() * inv_w) as usize;
+                if let Some(c) = counts.get_mut(k) {
+                    *c += 1;
+                }
+            }
+        });
+    }
+
+    /// Rows `(r at bin centre, g(r))`.
+    pub fn table(&self) -> Vec<(f64, f64)> {
+        let n = self.n as f64;
+        let rho = (n - 1.0) / self.volume;
+        self.counts
+            .iter()
+            .enumerate()
+            .map(|(k, &c)| {
+                let (a, b) = (k as f64 * self.width, (k + 1) as f64 * self.width);
+                let shell = 4.0 / 3.0 * std::f64::consts::PI * (b * b * b - a * a * a);
+                let ideal = 0.5 * n * rho * shell * self.samples as f64;
+                (
+                    0.5 * (a + b),
+                    if ideal > 0.0 { c as f64 / ideal } else { 0.0 },
+                )
+            })
+            .collect()
+    }
+}
+
+/// One time origin of the correlations.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+struct Origin {
+    sample: u64,
+    r0: Vec<DVec3>,
+    v0: Vec<DVec3>,
+    s0: Vec<DVec3>,
+}
+
+/// Mean-square displacement, velocity autocorrelation and (for rods) the long-axis
+/// orientational autocorrelations `⟨s(0)·s(t)⟩` and `⟨P₂(s(0)·s(t))⟩` over sliding time
+/// origins.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct Correlations {
+    dt: f64,
+    lags: usize,
+    origin_every: u64,
+    samples: u64,
+    origins: Vec<Origin>,
+    msd: Vec<f64>,
+    vacf: Vec<f64>,
+    oacf1: Vec<f64>,
+    oacf2: Vec<f64>,
+    counts: Vec<u64>,
+    want_msd: bool,
+    want_vacf: bool,
+    want_oacf: bool,
+}
+
+impl Correlations {
+    /// Lags `0, dt, …` up to `max_lag`; a new time origin every `max_lag / 10` (at least every
+    /// sample).
+    pub fn new(dt: f64, max_lag: f64, want_msd: bool, want_vacf: bool) -> Self {
+        Self::with_orientations(dt, max_lag, want_msd, want_vacf, false)
+    }
+
+    /// As [`new`](Self::new), and the orientational autocorrelation of rods if `want_oacf`.
+    pub fn with_orientations(
+        dt: f64,
+        max_lag: f64,
+        want_msd: bool,
+        want_vacf: bool,
+        want_oacf: bool,
+    ) -> Self {
+        let lags = (max_lag / dt).round().max(1.0) as usize + 1;
+        let origin_every = ((lags - 1) / 10).max(1) as u64;
+        Correlations {
+            dt,
+            lags,
+            origin_every,
+            samples: 0,
+            origins: Vec::new(),
+            msd: vec![0.0; lags],
+            vacf: vec![0.0; lags],
+            oacf1: vec![0.0; lags],
+            oacf2: vec![0.0; lags],
+            counts: vec![0; lags],
+            want_msd,
+            want_vacf,
+            want_oacf,
+        }
+    }
+
+    fn sample(&mut self, view: &View<'_>) {
+        let n = view.bodies.len();
+        let k = self.samples;
+        self.samples += 1;
+        if k.is_multiple_of(self.origin_every) {
+            self.origins.push(Origin {
+                sample: k,
+                r0: (0..n).map(|i| view.unwrapped(i)).collect(),
+                v0: view.bodies.iter().map(|b| b.v).collect(),
+                s0: if self.want_oacf {
+                    view.axes.clone()
+                } else {
+                    Vec::new()
+                },
+            });
+        }
+        let lags = self.lags as u64;
+        self.origins.retain(|o| k - o.sample < lags);
+        let now: Vec<DVec3> = (0..n).map(|i| view.unwrapped(i)).collect();
+        for o in &self.origins {
+            let lag = (k - o.sample) as usize;
+            let (mut m, mut c) = (0.0, 0.0);
+            for (i, b) in view.bodies.iter().enumerate() {
+                m += (now[i] - o.r0[i]).length_squared();
+                c += b.v.dot(o.v0[i]);
+            }
+            self.msd[lag] += m / n as f64;
+            self.vacf[lag] += c / n as f64;
+            if self.want_oacf && o.s0.len() == view.axes.len() && !o.s0.is_empty() {
+                let (mut c1, mut c2) = (0.0, 0.0);
+                for (a, b) in o.s0.iter().zip(&view.axes) {
+                    let x = a.dot(*b);
+                    c1 += x;
+                    c2 += 1.5 * x * x - 0.5;
+                }
+                let k = o.s0.len() as f64;
+                self.oacf1[lag] += c1 / k;
+                self.oacf2[lag] += c2 / k;
+            }
+            self.counts[lag] += 1;
+        }
+    }
+
+    /// Rows `(lag, MSD)` of the lags with data.
+    pub fn msd_table(&self) -> Vec<(f64, f64)> {
+        self.table(&self.msd)
+    }
+
+    /// Rows `(lag, ⟨v(0)·v(t)⟩)` of the lags with data.
+    pub fn vacf_table(&self) -> Vec<(f64, f64)> {
+        self.table(&self.vacf)
+    }
+
+    /// Rows `(lag, ⟨s(0)·s(t)⟩, ⟨P₂(s(0)·s(t))⟩)` of the lags with data (rods).
+    pub fn oacf_table(&self) -> Vec<(f64, f64, f64)> {
+        (0..self.lags)
+            .filter(|&k| self.counts[k] > 0)
+            .map(|k| {
+                let c = self.counts[k] as f64;
+                (k as f64 * self.dt, self.oacf1[k] / c, self.oacf2[k] / c)
+            })
+            .collect()
+    }
+
+    /// Whether the orientational autocorrelation was asked for.
+    pub fn wants_oacf(&self) -> bool {
+        self.want_oacf
+    }
+
+    fn table(&self, acc: &[f64]) -> Vec<(f64, f64)> {
+        (0..self.lags)
+            .filter(|&k| self.counts[k] > 0)
+            .map(|k| (k as f64 * self.dt, acc[k] / self.counts[k] as f64))
+            .collect()
+    }
+
+    /// Whether the MSD was asked for.
+    pub fn wants_msd(&self) -> bool {
+        self.want_msd
+    }
+
+    /// Whether the VACF was asked for.
+    pub fn wants_vacf(&self) -> bool {
+        self.want_vacf
+    }
+
+    /// Self-diffusion coefficient from the slope of the MSD over the second half of the lags
+    /// (least squares), `D = slope / 6`.
+    pub fn diffusion_from_msd(&self) -> Option<f64> {
+        let t = self.msd_table();
+        let half: Vec<(f64, f64)> = t[t.len() / 2..].to_vec();
+        if half.len() < 2 {
+            return None;
+        }
+        let n = half.len() as f64;
+        let mx = half.iter().map(|p| p.0).sum::<f64>() / n;
+        let my = half.iter().map(|p| p.1).sum::<f64>() / n;
+        let sxy: f64 = half.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+        let sxx: f64 = half.iter().map(|p| (p.0 - mx).powi(2)).sum();
+        (sxx > 0.0).then(|| sxy / sxx / 6.0)
+    }
+
+    /// Self-diffusion coefficient from the Green–Kubo integral of the VACF (trapezoids),
+    /// `D = ⅓ ∫ ⟨v(0)·v(t)⟩ dt`.
+    pub fn diffusion_from_vacf(&self) -> Option<f64> {
+        let t = self.vacf_table();
+        if t.len() < 2 {
+            return None;
+        }
+        let integral: f64 = t
+            .windows(2)
+            .map(|w| 0.5 * (w[0].1 + w[1].1) * (w[1].0 - w[0].0))
+            .sum();
+        Some(integral / 3.0)
+    }
+}
+
+/// One row of the pressure and energy time series.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct SeriesRow {
+    /// Simulated time since the start of production.
+    pub time: f64,
+    /// Kinetic energy.
+    pub kinetic: f64,
+    /// Potential energy.
+    pub potential: f64,
+    /// Total energy.
+    pub total: f64,
+    /// Instantaneous kinetic temperature.
+    pub temperature: f64,
+    /// Pressure averaged over the interval since the previous sample (NaN for the first).
+    pub pressure: f64,
+}
+
+/// Pressure and energy time series.
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
+pub struct Series {
+    rows: Vec<SeriesRow>,
+    last: Option<(f64, f64, f64)>,
+}
+
+impl Series {
+    fn sample(&mut self, view: &View<'_>) {
+        let n = view.bodies.len() as f64;
+        let l = view.lengths;
+        let volume = l.x * l.y * l.z;
+        let pressure = match self.last {
+            Some((t, w, kint)) if view.elapsed > t => {
+                let dt = view.elapsed - t;
+                let kt = 2.0 * (view.kinetic_integral - kint) / dt / view.dof;
+                (n * kt + (view.virial - w) / (3.0 * dt)) / volume
+            }
+            _ => f64::NAN,
+        };
+        self.last = Some((view.elapsed, view.virial, view.kinetic_integral));
+        self.rows.push(SeriesRow {
+            time: view.elapsed,
+            kinetic: view.kinetic,
+            potential: view.potential,
+            total: view.kinetic + view.potential,
+            temperature: 2.0 * view.kinetic / view.dof,
+            pressure,
+        });
+    }
+
+    /// The rows.
+    pub fn rows(&self) -> &[SeriesRow] {
+        &self.rows
+    }
+}
+
+/// The observables a scene asked for.
+#[derive(Debug, Default)]
+pub struct Observers {
+    /// Radial distribution function.
+    pub rdf: Option<Rdf>,
+    /// MSD and VACF.
+    pub correlations: Option<Correlations>,
+    /// Pressure and energy series.
+    pub series: Option<Series>,
+    /// Trajectory frames (written by the output module).
+    pub trajectory: Option<crate::analysis::output::Trajectory>,
+    /// The per-sample series behind the summary's error bars.
+    pub samples: Option<crate::analysis::smooth::Samples>,
+    /// The smooth potential (terraced rods and Gay–Berne), evaluated at every
+    /// `smooth_every`-th sample.
+    pub smooth: Option<Box<dyn crate::analysis::smooth::Evaluate>>,
+    /// Samples between evaluations of the smooth potential (`output.smooth_every`; 0 counts
+    /// as 1). The count is the sample's index in `samples`, which checkpoints keep, so a
+    /// resumed run evaluates at the same samples.
+    pub smooth_every: u64,
+    /// `output.max_bytes`: the most the series and the trajectory may take, checked as they
+    /// grow ([`Sampler::over_budget`]); the estimates are those of
+    /// the scene's output checks (`limits::check_outputs`), so a run that passed that check never reaches it.
+    pub max_bytes: Option<u64>,
+    /// Estimated bytes of one trajectory frame (set at the first frame).
+    frame_bytes: f64,
+}
+
+impl Sampler for Observers {
+    fn sample(&mut self, view: &View<'_>) {
+        if let Some(r) = &mut self.rdf {
+            r.sample(view);
+        }
+        if let Some(c) = &mut self.correlations {
+            c.sample(view);
+        }
+        if let Some(s) = &mut self.series {
+            s.sample(view);
+        }
+        if let Some(s) = &mut self.samples {
+            let due = (s.rows().len() as u64).is_multiple_of(self.smooth_every.max(1));
+            let smooth = self
+                .smooth
+                .as_ref()
+                .filter(|_| due)
+                .map(|e| e.evaluate(view));
+            s.sample(view, smooth);
+        }
+    }
+
+    fn frame(&mut self, view: &View<'_>) {
+        if let Some(t) = &mut self.trajectory {
+            t.write_frame(view);
+            let rods = !view.axes.is_empty();
+            self.frame_bytes = view.bodies.len() as f64
+                * crate::analysis::output::trajectory_line_bytes(rods)
+                + 200.0;
+        }
+    }
+
+    fn over_budget(&self) -> Option<String> {
+        use crate::analysis::output::{SERIES_ROW_BYTES, short};
+        let max = self.max_bytes? as f64;
+        let rows = self.series.as_ref().map_or(0, |s| s.rows.len()) as f64;
+        if rows * SERIES_ROW_BYTES > max {
+            return Some(format!(
+                "output.series: series.csv has reached {} rows (about {} bytes), the limit \
+                 output.max_bytes = {}: lengthen output.sample_interval, or raise \
+                 output.max_bytes",
+                short(rows),
+                short(rows * SERIES_ROW_BYTES),
+                short(max)
+            ));
+        }
+        let frames = self.trajectory.as_ref().map_or(0, |t| t.frames()) as f64;
+        if frames * self.frame_bytes > max {
+            return Some(format!(
+                "output.trajectory: trajectory.xyz has reached {} frames (about {} bytes), \
+                 the limit output.max_bytes = {}: lengthen output.trajectory.interval, or \
+                 raise output.max_bytes",
+                short(frames),
+                short(frames * self.frame_bytes),
+                short(max)
+            ));
+        }
+        None
+    }
+}

@@ -1,0 +1,383 @@
+//! Initial configurations: lattices, files, and Maxwell–Boltzmann velocities.
+
+use std::path::Path;
+
+use glam::DVec3;
+use rand::{RngExt, SeedableRng};
+use rand_distr::{Distribution, StandardNormal};
+use rand_xoshiro::Xoshiro256PlusPlus;
+
+use crate::config::scene::{Positions, Scene, SceneError};
+
+/// Positions, species and box of the initial configuration.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Configuration {
+    /// Box edge lengths.
+    pub lengths: DVec3,
+    /// Positions.
+    pub positions: Vec<DVec3>,
+    /// Species index of each body.
+    pub species: Vec<u32>,
+    /// Nearest-neighbour distance of the lattice (`None` for a file).
+    pub lattice_spacing: Option<f64>,
+}
+
+/// Sites of a lattice: unit-cell basis in fractions of the cell.
+fn basis(kind: Positions) -> &'static [[f64; 3]] {
+    match kind {
+        Positions::Fcc => &[
+            [0.25, 0.25, 0.25],
+            [0.75, 0.75, 0.25],
+            [0.75, 0.25, 0.75],
+            [0.25, 0.75, 0.75],
+        ],
+        _ => &[[0.5, 0.5, 0.5]],
+    }
+}
+
+/// The box of a scene that gives `density` (and `aspect`) or `lengths`.
+pub fn box_lengths(scene: &Scene) -> Option<DVec3> {
+    let n = scene.n_bodies() as f64;
+    match (scene.box_.density, scene.box_.lengths) {
+        (_, Some(l)) => Some(DVec3::from(l)),
+        (Some(rho), None) => {
+            let a = DVec3::from(scene.box_.aspect.unwrap_or([1.0; 3]));
+            let volume = n / rho;
+            let unit = (volume / (a.x * a.y * a.z)).cbrt();
+            Some(a * unit)
+        }
+        (None, None) => None,
+    }
+}
+
+/// Builds the lattice of a scene: unit cells per axis in proportion to the box edges, enough
+/// sites for every body, bodies on the first sites in lattice order and species dealt in the
+/// order the scene lists them, then shuffled over the sites with the scene's seed (so a
+/// mixture is mixed).
+///
+/// # Errors
+/// [`SceneError::Invalid`] naming `box.density` if neighbouring lattice sites are closer
+/// than the smallest hard-core diameter (no species could sit on them).
+pub fn lattice(scene: &Scene, smallest_core: f64) -> Result<Configuration, SceneError> {
+    let lengths = box_lengths(scene).expect("a lattice scene has a box");
+    let n = scene.n_bodies() as usize;
+    let basis = basis(scene.init.positions);
+    let cells_needed = n.div_ceil(basis.len()) as f64;
+    // Unit cells per axis ∝ edge length, product ≥ cells needed.
+    let scale = (cells_needed / (lengths.x * lengths.y * lengths.z)).cbrt();
+    let mut k = [0usize; 3];
+    for a in 0..3 {
+        k[a] = ((lengths[a] * scale).round() as usize).max(1);
+    }
+    while k[0] * k[1] * k[2] < cells_needed as usize {
+        // Grow the axis whose cells are widest.
+        let a = (0..3)
+            .max_by(|&x, &y| (lengths[x] / k[x] as f64).total_cmp(&(lengths[y] / k[y] as f64)))
+            .unwrap_or(0);
+        k[a] += 1;
+    }
+    let cell = DVec3::new(
+        lengths.x / k[0] as f64,
+        lengths.y / k[1] as f64,
+        lengths.z / k[2] as f64,
+    );
+    let spacing = match scene.init.positions {
+        Positions::Fcc => {
+            // Nearest neighbours of an fcc lattice are half a face diagonal apart.
+            let d = |a: usize, b: usize| 0.5 * (cell[a] * cell[a] + cell[b] * cell[b]).sqrt();
+            d(0, 1).min(d(0, 2)).min(d(1, 2))
+        }
+        _ => cell.min_element(),
+    };
+    // Single-cell-thick axes: the periodic image along that axis is one cell away.
+    let spacing = spacing.min(cell.min_element());
+    if smallest_core > 0.0 && spacing < smallest_core {
+        let name = match scene.init.positions {
+            Positions::Fcc => "fcc",
+            _ => "sc",
+        };
+        let rho = n as f64 / (lengths.x * lengths.y * lengths.z);
+        return Err(SceneError::invalid(
+            "box.density",
+            format!(
+                "density {rho:.6} is too high for an {name} lattice of {n} bodies: neighbouring \
+                 sites are {spacing:.6} apart, less than the hard-core diameter {smallest_core}; \
+                 lower the density, use an fcc lattice, or start from a file"
+            ),
+        ));
+    }
+    let mut positions = Vec::with_capacity(n);
+    'fill: for z in 0..k[2] {
+        for y in 0..k[1] {
+            for x in 0..k[0] {
+                for b in basis {
+                    if positions.len() == n {
+                        break 'fill;
+                    }
+                    let f = DVec3::new(x as f64 + b[0], y as f64 + b[1], z as f64 + b[2]);
+                    positions.push(f * cell);
+                }
+            }
+        }
+    }
+    let mut species: Vec<u32> = scene
+        .species
+        .iter()
+        .enumerate()
+        .flat_map(|(s, sp)| std::iter::repeat_n(s as u32, sp.count as usize))
+        .collect();
+    if scene.species.len() > 1 {
+        // Fisher–Yates with the scene's seed (a stream apart from the velocities').
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(scene.seed ^ 0x5eed_5eed_0000_0001);
+        for i in (1..species.len()).rev() {
+            let j = rng.random_range(0..=i);
+            species.swap(i, j);
+        }
+    }
+    Ok(Configuration {
+        lengths,
+        positions,
+        species,
+        lattice_spacing: Some(spacing),
+    })
+}
+
+/// Reads positions from an XYZ or extended XYZ file: a count line, a comment line (an
+/// extended-XYZ `Lattice="Lx 0 0 0 Ly 0 0 0 Lz"` gives the box), then `species x y z …` per
+/// body. The species must be the scene's, in the scene's counts; only the first frame is read.
+///
+/// # Errors
+/// [`SceneError::Invalid`] naming `init.file` for unreadable or inconsistent files.
+pub fn read_xyz(scene: &Scene, path: &Path) -> Result<Configuration, SceneError> {
+    let key = "init.file";
+    let err = |msg: String| SceneError::invalid(key, format!("{}: {msg}", path.display()));
+    let text = std::fs::read_to_string(path).map_err(|e| err(e.to_string()))?;
+    let mut lines = text.lines();
+    let count: usize = lines
+        .next()
+        .and_then(|l| l.trim().parse().ok())
+        .ok_or_else(|| err("the first line must be the number of bodies".into()))?;
+    if count as u64 != scene.n_bodies() {
+        return Err(err(format!(
+            "the file has {count} bodies, the scene's species count {}",
+            scene.n_bodies()
+        )));
+    }
+    let comment = lines.next().unwrap_or("");
+    let file_box = parse_lattice(comment).map_err(&err)?;
+    let lengths = match (box_lengths(scene), file_box) {
+        (Some(l), _) => l,
+        (None, Some(l)) => l,
+        (None, None) => {
+            return Err(err(
+                "no box: give `box.lengths` or a Lattice=\"…\" in the file's comment line".into(),
+            ));
+        }
+    };
+    let names: Vec<&str> = scene.species.iter().map(|s| s.name.as_str()).collect();
+    let mut positions = Vec::with_capacity(count);
+    let mut species = Vec::with_capacity(count);
+    let mut per_species = vec![0u64; names.len()];
+    for k in 0..count {
+        let line = lines
+            .next()
+            .ok_or_else(|| err(format!("ends after {k} of {count} bodies")))?;
+        let mut f = line.split_whitespace();
+        let name = f.next().unwrap_or("");
+        let s = names
+            .iter()
+            .position(|&n| n == name)
+            .ok_or_else(|| err(format!("line {}: unknown species `{name}`", k + 3)))?;
+        let mut x = [0.0; 3];
+        for c in &mut x {
+            *c = f
+                .next()
+                .and_then(|v| v.parse::<f64>().ok())
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| err(format!("line {}: expected three finite coordinates", k + 3)))?;
+        }
+        per_species[s] += 1;
+        positions.push(DVec3::from(x));
+        species.push(s as u32);
+    }
+    for (s, sp) in scene.species.iter().enumerate() {
+        if per_species[s] != sp.count {
+            return Err(err(format!(
+                "species `{}` has {} bodies in the file, {} in the scene",
+                sp.name, per_species[s], sp.count
+            )));
+        }
+    }
+    Ok(Configuration {
+        lengths,
+        positions,
+        species,
+        lattice_spacing: None,
+    })
+}
+
+/// Reads the orientations of rods from the first frame of an extended XYZ file: the
+/// `orientation:R:4` column of its `Properties` (unit quaternions with the scalar last, as
+/// `dmd` writes them); each body's axis is the quaternion's image of `z`.
+///
+/// # Errors
+/// [`SceneError::Invalid`] naming `init.orientations` for a file without the column or with
+/// bad numbers.
+pub fn read_orientations(path: &Path, n: usize) -> Result<Vec<DVec3>, SceneError> {
+    let key = "init.orientations";
+    let err = |msg: String| SceneError::invalid(key, format!("{}: {msg}", path.display()));
+    let text = std::fs::read_to_string(path).map_err(|e| err(e.to_string()))?;
+    let mut lines = text.lines().skip(1);
+    let comment = lines.next().unwrap_or("");
+    let props = comment
+        .split_whitespace()
+        .find_map(|w| w.strip_prefix("Properties="))
+        .ok_or_else(|| {
+            err("no Properties=… in the comment line, so no orientation column".into())
+        })?;
+    let fields: Vec<&str> = props.split(':').collect();
+    let mut column = 0;
+    let mut at = None;
+    for f in fields.chunks(3) {
+        let [name, _, count] = f else {
+            return Err(err(format!("malformed Properties={props}")));
+        };
+        let count: usize = count
+            .parse()
+            .map_err(|_| err(format!("malformed Properties={props}")))?;
+        if *name == "orientation" {
+            if count != 4 {
+                return Err(err("the orientation column must have 4 components".into()));
+            }
+            at = Some(column);
+        }
+        column += count;
+    }
+    let at = at.ok_or_else(|| err("the file has no orientation:R:4 column".into()))?;
+    let mut axes = Vec::with_capacity(n);
+    for k in 0..n {
+        let line = lines
+            .next()
+            .ok_or_else(|| err(format!("ends after {k} of {n} bodies")))?;
+        let v: Vec<f64> = line
+            .split_whitespace()
+            .skip(at)
+            .take(4)
+            .map(|x| x.parse::<f64>().unwrap_or(f64::NAN))
+            .collect();
+        let q = glam::DQuat::from_xyzw(
+            *v.first().unwrap_or(&f64::NAN),
+            *v.get(1).unwrap_or(&f64::NAN),
+            *v.get(2).unwrap_or(&f64::NAN),
+            *v.get(3).unwrap_or(&f64::NAN),
+        );
+        let len = q.length();
+        if !(len.is_finite() && len > 0.5 && len < 2.0) {
+            return Err(err(format!(
+                "line {}: the orientation is not a unit quaternion",
+                k + 3
+            )));
+        }
+        axes.push((q / len) * DVec3::Z);
+    }
+    Ok(axes)
+}
+
+/// The box of an extended-XYZ comment line (orthorhombic lattices only).
+fn parse_lattice(comment: &str) -> Result<Option<DVec3>, String> {
+    let Some(start) = comment.find("Lattice=\"") else {
+        return Ok(None);
+    };
+    let rest = &comment[start + 9..];
+    let end = rest.find('"').ok_or("unterminated Lattice=\"…\"")?;
+    let v: Vec<f64> = rest[..end]
+        .split_whitespace()
+        .map(|x| {
+            x.parse::<f64>()
+                .map_err(|_| format!("bad Lattice number `{x}`"))
+        })
+        .collect::<Result<_, _>>()?;
+    if v.len() != 9 {
+        return Err("Lattice=\"…\" needs 9 numbers".into());
+    }
+    let off = [v[1], v[2], v[3], v[5], v[6], v[7]];
+    if off.iter().any(|&x| x != 0.0) {
+        return Err(
+            "only orthorhombic boxes are supported (off-diagonal Lattice entries must be 0)".into(),
+        );
+    }
+    let l = DVec3::new(v[0], v[4], v[8]);
+    if !(l.is_finite() && l.min_element() > 0.0) {
+        return Err("Lattice=\"…\" edges must be positive".into());
+    }
+    Ok(Some(l))
+}
+
+/// Maxwell–Boltzmann velocities at `temperature` for bodies of `masses`, with zero total
+/// momentum and the kinetic energy scaled to exactly `(3N − 3)/2 · kT`.
+pub fn maxwell_boltzmann(masses: &[f64], temperature: f64, seed: u64) -> Vec<DVec3> {
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
+    let mut v: Vec<DVec3> = masses
+        .iter()
+        .map(|&m| {
+            let s = (temperature / m).sqrt();
+            DVec3::new(
+                StandardNormal.sample(&mut rng),
+                StandardNormal.sample(&mut rng),
+                StandardNormal.sample(&mut rng),
+            ) * s
+        })
+        .collect();
+    let total_m: f64 = masses.iter().sum();
+    let p: DVec3 = v.iter().zip(masses).map(|(v, &m)| *v * m).sum();
+    let u = p / total_m;
+    for x in &mut v {
+        *x -= u;
+    }
+    let k: f64 = v
+        .iter()
+        .zip(masses)
+        .map(|(v, &m)| 0.5 * m * v.length_squared())
+        .sum();
+    let target = 0.5 * (3.0 * masses.len() as f64 - 3.0) * temperature;
+    if k > 0.0 {
+        let f = (target / k).sqrt();
+        for x in &mut v {
+            *x *= f;
+        }
+    }
+    v
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn velocities_have_zero_momentum_and_exact_temperature() {
+        let masses: Vec<f64> = (0..100)
+            .map(|i| if i % 2 == 0 { 1.0 } else { 3.0 })
+            .collect();
+        let v = maxwell_boltzmann(&masses, 1.7, 3);
+        let p: DVec3 = v.iter().zip(&masses).map(|(v, &m)| *v * m).sum();
+        assert!(p.length() < 1e-12);
+        let k: f64 = v
+            .iter()
+            .zip(&masses)
+            .map(|(v, &m)| 0.5 * m * v.length_squared())
+            .sum();
+        assert!((k - 0.5 * 297.0 * 1.7).abs() < 1e-10);
+        assert_eq!(v, maxwell_boltzmann(&masses, 1.7, 3));
+        assert_ne!(v, maxwell_boltzmann(&masses, 1.7, 4));
+    }
+
+    #[test]
+    fn lattice_comment_lines() {
+        assert_eq!(parse_lattice("Time=3").unwrap(), None);
+        assert_eq!(
+            parse_lattice("Lattice=\"2 0 0 0 3 0 0 0 4\" Properties=species:S:1:pos:R:3").unwrap(),
+            Some(DVec3::new(2.0, 3.0, 4.0))
+        );
+        assert!(parse_lattice("Lattice=\"2 1 0 0 3 0 0 0 4\"").is_err());
+    }
+}

@@ -1,0 +1,458 @@
+//! From a scene to its interaction model: stepped tables for spheres, terraced potentials for
+//! rods (003 Eq. 7), and the search settings and initial rotation of the rods.
+//!
+//! Lennard-Jones spheres on terraces need no root search: their terraces are radial steps with
+//! analytic event times ([`terraced::radial_steps`](crate::models::terraced::radial_steps)), so they run on the
+//! stepped path. Only potentials that depend on orientations (the rods of 003 Eqs. 22–23 with
+//! `ζ > 0`, Gay–Berne) build a [`Terraced`](crate::models::terraced::Terraced) model.
+
+use glam::DVec3;
+use potential::{
+    GayBerne, Layout, LennardJones, LevelSet, LjRod, NearMinimum, PairPotential, Placement,
+    Profile, StepEnergy, Steps, TerraceMap, TerraceOptions, profile,
+};
+use rand::SeedableRng;
+use rand_distr::{Distribution, StandardNormal};
+use rand_xoshiro::Xoshiro256PlusPlus;
+
+use crate::config::scene::{
+    NearMinimumSpec, PlacementSpec, PotentialSpec, Scene, SceneError, SearchMethodSpec,
+    StepEnergySpec, TerraceSpec,
+};
+use crate::engine::potential::Potentials;
+use crate::models::search::{SearchMethod, SearchSettings};
+use crate::models::terraced::{PairTable, PairTerraces, RodSpecies, draw_omega, radial_steps};
+
+/// The type of an absent profile (Gay–Berne has none).
+type NoProfile = Profile<fn(f64) -> f64>;
+
+/// The interaction model a scene asks for, built (scene in internal units).
+pub enum Plan {
+    /// Stepped radial potentials (given as steps, or Lennard-Jones terraces made radial).
+    Spheres(Potentials),
+    /// The modified Lennard-Jones rods of 003 Eqs. 22–23.
+    Rods(Vec<PairTable<LjRod>>),
+    /// Gay–Berne rods.
+    GayBerne(Vec<PairTable<GayBerne>>),
+    /// Rigid site molecules with stepped site–site potentials (issue 10).
+    Sites(crate::config::site_scene::SitesPlan),
+    /// Semi-flexible molecules (species with `bonds`): RATTLE between events.
+    Flexible(crate::config::flexible_scene::FlexiblePlan),
+}
+
+impl Plan {
+    /// Builds the model tables of a checked scene in internal units.
+    ///
+    /// # Errors
+    /// [`SceneError::Invalid`] naming the pair table whose potential or terraces fail.
+    pub fn of(scene: &Scene) -> Result<Plan, SceneError> {
+        // Messages give energies in the scene's units.
+        let scale = crate::config::units::Units::of(scene.units).energy;
+        let names: Vec<&str> = scene.species.iter().map(|s| s.name.as_str()).collect();
+        let index = |n: &str| names.iter().position(|&m| m == n).expect("checked");
+        let kt = scene.init.temperature;
+        if scene.has_bonds() {
+            return Ok(Plan::Flexible(
+                crate::config::flexible_scene::FlexiblePlan::of(scene)?,
+            ));
+        }
+        if scene.has_sites() {
+            return Ok(Plan::Sites(crate::config::site_scene::SitesPlan::of(
+                scene,
+            )?));
+        }
+        let first = scene.pair.first().and_then(|p| p.potential);
+        match first {
+            None => Ok(Plan::Spheres(Potentials::from_scene(scene))),
+            Some(PotentialSpec::LennardJones { .. })
+            | Some(PotentialSpec::Rods { zeta: 0.0, .. }) => {
+                let mut tables = Vec::new();
+                for (k, p) in scene.pair.iter().enumerate() {
+                    let (epsilon, sigma) = match p.potential.expect("checked") {
+                        PotentialSpec::LennardJones { epsilon, sigma }
+                        | PotentialSpec::Rods { epsilon, sigma, .. } => (epsilon, sigma),
+                        PotentialSpec::GayBerne { .. } => unreachable!("checked"),
+                    };
+                    let lj =
+                        LennardJones::new(epsilon, sigma).map_err(|e| potential_error(k, e))?;
+                    let prof =
+                        profile::lennard_jones(&lj).map_err(|e| terrace_error(k, e, scale))?;
+                    let t = p.terraces.as_ref().expect("checked");
+                    let map = terrace_map(k, &lj, Some(&prof), t, kt, scale)?;
+                    let steps =
+                        radial_steps(&prof, &map).map_err(|e| terrace_error(k, e, scale))?;
+                    tables.push(((index(&p.species[0]), index(&p.species[1])), steps));
+                }
+                Ok(Plan::Spheres(Potentials::from_tables(names.len(), &tables)))
+            }
+            Some(PotentialSpec::Rods { .. }) => {
+                let mut tables = Vec::new();
+                for (k, p) in scene.pair.iter().enumerate() {
+                    let PotentialSpec::Rods {
+                        epsilon,
+                        sigma,
+                        zeta,
+                    } = p.potential.expect("checked")
+                    else {
+                        unreachable!("checked: one kind per scene")
+                    };
+                    let rod =
+                        LjRod::new(epsilon, sigma, zeta).map_err(|e| potential_error(k, e))?;
+                    let prof = profile::rods(&rod).map_err(|e| terrace_error(k, e, scale))?;
+                    let t = p.terraces.as_ref().expect("checked");
+                    let map = terrace_map(k, &rod, Some(&prof), t, kt, scale)?;
+                    let terraces = PairTerraces::new(rod, map).map_err(|e| {
+                        SceneError::invalid(format!("pair[{k}].terraces"), e.to_string())
+                    })?;
+                    tables.push(((index(&p.species[0]), index(&p.species[1])), terraces));
+                }
+                Ok(Plan::Rods(tables))
+            }
+            Some(PotentialSpec::GayBerne { .. }) => {
+                let mut tables = Vec::new();
+                for (k, p) in scene.pair.iter().enumerate() {
+                    let PotentialSpec::GayBerne {
+                        sigma0,
+                        epsilon0,
+                        kappa,
+                        kappa_prime,
+                        mu,
+                        nu,
+                    } = p.potential.expect("checked")
+                    else {
+                        unreachable!("checked: one kind per scene")
+                    };
+                    let gb = GayBerne::new(sigma0, epsilon0, kappa, kappa_prime, mu, nu)
+                        .map_err(|e| potential_error(k, e))?;
+                    let t = p.terraces.as_ref().expect("checked");
+                    let none: Option<&NoProfile> = None;
+                    let map = terrace_map(k, &gb, none, t, kt, scale)?;
+                    let terraces = PairTerraces::with_outer_reach(gb, map).map_err(|e| {
+                        SceneError::invalid(format!("pair[{k}].terraces"), e.to_string())
+                    })?;
+                    tables.push(((index(&p.species[0]), index(&p.species[1])), terraces));
+                }
+                Ok(Plan::GayBerne(tables))
+            }
+        }
+    }
+
+    /// The interaction reach (the largest of all pairs).
+    pub fn reach(&self) -> f64 {
+        match self {
+            Plan::Spheres(p) => p.reach(),
+            Plan::Rods(t) => t.iter().map(|(_, p)| p.reach()).fold(0.0, f64::max),
+            Plan::GayBerne(t) => t.iter().map(|(_, p)| p.reach()).fold(0.0, f64::max),
+            Plan::Sites(p) => p.reach(),
+            Plan::Flexible(p) => p.reach(),
+        }
+    }
+
+    /// The model's name in the summary.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Plan::Spheres(p) if p.all_hard_spheres() => "hard-spheres",
+            Plan::Spheres(_) => "stepped",
+            Plan::Rods(_) => "terraced-rods",
+            Plan::GayBerne(_) => "terraced-gay-berne",
+            Plan::Sites(_) => "rigid-sites",
+            Plan::Flexible(_) => "semi-flexible",
+        }
+    }
+}
+
+fn potential_error(k: usize, e: potential::PotentialError) -> SceneError {
+    SceneError::invalid(format!("pair[{k}].potential"), e.to_string())
+}
+
+/// A terrace map's error for pair table `k`, energies divided by `scale` (internal per scene
+/// unit).
+fn terrace_error(k: usize, e: potential::PotentialError, scale: f64) -> SceneError {
+    let key = format!("pair[{k}].terraces");
+    let out = |x: f64| x / scale;
+    let problem = match e {
+        potential::PotentialError::LevelAtMinimum { level, minimum, .. } => format!(
+            "level {} lies on the potential's minimum {}: the terrace below it would have zero \
+             width (003 §V); choose another step or levels, or set `near_minimum = \"shift\"`",
+            out(level),
+            out(minimum)
+        ),
+        potential::PotentialError::LevelBelowMinimum { level, minimum } => format!(
+            "level {} lies below the potential's minimum {}: no pair can cross it",
+            out(level),
+            out(minimum)
+        ),
+        potential::PotentialError::LevelAboveCore { level, core } => format!(
+            "level {} is not below the hard-core level {}",
+            out(level),
+            out(core)
+        ),
+        e => e.to_string(),
+    };
+    SceneError::invalid(key, problem)
+}
+
+/// The terrace map of a pair table (003 Eq. 7 and the placement and step-energy rules).
+fn terrace_map<P: PairPotential, F: Fn(f64) -> f64>(
+    k: usize,
+    pot: &P,
+    prof: Option<&Profile<F>>,
+    t: &TerraceSpec,
+    kt: f64,
+    scale: f64,
+) -> Result<TerraceMap, SceneError> {
+    let err = |e| terrace_error(k, e, scale);
+    let mut opts = TerraceOptions::default();
+    if let Some(c) = t.core {
+        opts = opts.with_core(c);
+    }
+    if t.near_minimum == NearMinimumSpec::Shift {
+        opts.near_minimum = NearMinimum::Shift;
+    }
+    let step = t.step.or(t.step_kt.map(|x| x * kt));
+    let rule = |step: f64| match t.step_energy {
+        StepEnergySpec::Equal => StepEnergy::Equal(step),
+        StepEnergySpec::Midpoint => StepEnergy::Midpoint,
+        StepEnergySpec::VolumeAverage => StepEnergy::VolumeAverage,
+        StepEnergySpec::Virial => StepEnergy::Virial { kt },
+    };
+    let profile_needed = || {
+        prof.ok_or_else(|| {
+            SceneError::invalid(
+                format!("pair[{k}].terraces"),
+                "this rule needs a radial profile of the potential",
+            )
+        })
+    };
+    if let Some(levels) = &t.levels {
+        return match &t.energies {
+            Some(e) => TerraceMap::from_levels(pot, levels, Steps::Energies(e), &opts).map_err(err),
+            None => {
+                let set = LevelSet::new(pot.minimum(), levels, &opts).map_err(err)?;
+                let energies = rule(1.0).energies(profile_needed()?, &set).map_err(err)?;
+                TerraceMap::new(set, Steps::Energies(&energies)).map_err(err)
+            }
+        };
+    }
+    let step = step.expect("checked: step, step_kt or levels");
+    if t.placement == PlacementSpec::EqualEnergy
+        && t.step_energy == StepEnergySpec::Equal
+        && t.outermost.is_none()
+    {
+        return TerraceMap::evenly_spaced(pot, step, &opts).map_err(err);
+    }
+    let mut layout = Layout::paper(pot.minimum(), step, &opts).map_err(err)?;
+    if let Some(o) = t.outermost {
+        layout = layout.with_outermost(o);
+    }
+    let placement = match t.placement {
+        PlacementSpec::EqualEnergy => Placement::EqualEnergy,
+        PlacementSpec::EqualDistance => Placement::EqualDistance,
+        PlacementSpec::EqualVolume => Placement::EqualVolume,
+    };
+    TerraceMap::from_profile(profile_needed()?, placement, &layout, rule(step), &opts).map_err(err)
+}
+
+/// Default of `search.horizon` in windows: how far certified prediction may jump ahead in
+/// one call (measured on the paper's rods, docs/PERFORMANCE.md).
+pub const DEFAULT_HORIZON_WINDOWS: f64 = 2.0;
+
+/// Default of `search.max_change`: steps limited to where `U` is predicted to cross at most
+/// this fraction of the terrace's width (see `docs/VALIDATION.md` for the misses and the cost
+/// against it).
+pub const DEFAULT_MAX_CHANGE: f64 = 0.5;
+
+/// The search settings of a rods scene (internal units): the scene's `[search]` with its
+/// defaults. The default maximum step is the paper's 4 fs carried over to any rods by the two
+/// time scales it resolves (003 §V.A): `min(0.076 √(I/kT), 0.0064 σ √(m/kT))` over the species
+/// and pairs (3.98 fs for the paper's rods at T* = 1.4).
+pub fn search_settings(scene: &Scene) -> SearchSettings {
+    let spec = scene.search.clone().unwrap_or_default();
+    let kt = scene.init.temperature;
+    let mut step = f64::INFINITY;
+    for s in &scene.species {
+        if let Some(i) = s.inertia {
+            step = step.min(0.076 * (i / kt).sqrt());
+        }
+        for p in &scene.pair {
+            let sigma = match p.potential {
+                Some(PotentialSpec::Rods { sigma, .. })
+                | Some(PotentialSpec::LennardJones { sigma, .. }) => sigma,
+                Some(PotentialSpec::GayBerne { sigma0, .. }) => sigma0,
+                None => continue,
+            };
+            step = step.min(0.0064 * sigma * (s.mass / kt).sqrt());
+        }
+    }
+    let max_step = spec.max_step.unwrap_or(step);
+    SearchSettings {
+        method: match spec.method {
+            SearchMethodSpec::Adaptive => SearchMethod::Adaptive,
+            SearchMethodSpec::Grid => SearchMethod::Grid {
+                threshold: spec.grid_threshold.unwrap_or(f64::INFINITY),
+            },
+        },
+        max_step,
+        window: spec.window.unwrap_or(max_step),
+        jitter: spec.jitter.unwrap_or(0.01),
+        verify_step: spec.verify_step,
+        max_change: spec.max_change.unwrap_or(DEFAULT_MAX_CHANGE),
+        horizon: spec
+            .horizon
+            .unwrap_or(DEFAULT_HORIZON_WINDOWS * spec.window.unwrap_or(max_step)),
+    }
+}
+
+/// The species of a rods scene: masses and moments of inertia.
+pub fn rod_species(scene: &Scene) -> Vec<RodSpecies> {
+    scene
+        .species
+        .iter()
+        .map(|s| RodSpecies {
+            mass: s.mass,
+            inertia: s.inertia.expect("checked: rods have inertia"),
+        })
+        .collect()
+}
+
+/// Uniformly random unit axes, one per body, from the scene's seed (a stream of its own).
+pub fn random_axes(n: usize, seed: u64) -> Vec<DVec3> {
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed ^ 0x0a15_0a15_0000_0003);
+    (0..n)
+        .map(|_| {
+            loop {
+                let g = DVec3::new(
+                    StandardNormal.sample(&mut rng),
+                    StandardNormal.sample(&mut rng),
+                    StandardNormal.sample(&mut rng),
+                );
+                if let Some(s) = g.try_normalize() {
+                    break s;
+                }
+            }
+        })
+        .collect()
+}
+
+/// Angular velocities of rods with axes `axes` and moments `inertia` equipartitioned at `kt`
+/// (two Gaussian components perpendicular to each axis), scaled so that the rotational
+/// kinetic energy is exactly `N kT` (two degrees of freedom per rod).
+pub fn equipartitioned_omegas(axes: &[DVec3], inertia: &[f64], kt: f64, seed: u64) -> Vec<DVec3> {
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed ^ 0x0e6a_0e6a_0000_0005);
+    let mut w: Vec<DVec3> = axes
+        .iter()
+        .zip(inertia)
+        .map(|(&s, &i)| draw_omega(s, i, kt, &mut rng))
+        .collect();
+    let k: f64 = w
+        .iter()
+        .zip(inertia)
+        .map(|(w, &i)| 0.5 * i * w.length_squared())
+        .sum();
+    let target = axes.len() as f64 * kt;
+    if k > 0.0 {
+        let f = (target / k).sqrt();
+        for x in &mut w {
+            *x *= f;
+        }
+    }
+    w
+}
+
+impl Scene {
+    /// Whether the event-driven engine runs this scene as terraced rods or Gay–Berne bodies
+    /// (`Terraced<P>`), whose smooth potential the estimators evaluate.
+    pub fn has_terraced_smooth_potential(&self) -> bool {
+        !self.has_bonds()
+            && !self.has_sites()
+            && self
+                .pair
+                .first()
+                .and_then(|p| p.potential)
+                .is_some_and(|p| p.is_anisotropic())
+    }
+
+    /// Whether a run of this scene evaluates the smooth estimators: `output.smooth_estimators`
+    /// (default on), a terraced smooth potential and a sampling interval.
+    pub fn wants_smooth_estimators(&self) -> bool {
+        self.output.smooth_estimators.unwrap_or(true)
+            && self.output.sample_interval.is_some()
+            && self.has_terraced_smooth_potential()
+    }
+}
+
+/// The estimator of a terraced scene (in internal units) over its pair tables, with the
+/// smoothing window the smd engine would use for each pair (`[smd] smoothing`, else its
+/// default), or `None` when the scene does not want one or its cut-off does not fit the box
+/// (minimum image needs `r_u` below half the shortest side; an explicit
+/// `output.smooth_estimators = true` then is an error).
+///
+/// # Errors
+/// [`SceneError::Invalid`] naming `output.smooth_estimators` or
+/// `smd.smoothing`.
+pub fn estimator<P: PairPotential + Clone + std::fmt::Debug + Send + 'static>(
+    scene: &Scene,
+    lengths: DVec3,
+    tables: &[PairTable<P>],
+) -> Result<Option<Box<dyn crate::analysis::smooth::Evaluate>>, SceneError> {
+    if !scene.wants_smooth_estimators() {
+        return Ok(None);
+    }
+    let mut pots = Vec::with_capacity(tables.len());
+    let mut cutoff: f64 = 0.0;
+    for (k, ((a, b), t)) in tables.iter().enumerate() {
+        let spec = scene.pair[k]
+            .potential
+            .expect("terraced pairs have a potential");
+        let (r_l, r_u) = crate::config::smd_spec::window(scene, &spec);
+        let p = potential::Smoothed::new(t.potential().clone(), r_l, r_u)
+            .map_err(|e| SceneError::invalid("smd.smoothing", e.to_string()))?;
+        cutoff = cutoff.max(r_u);
+        pots.push(((*a, *b), p));
+    }
+    let half = 0.5 * lengths.min_element();
+    if cutoff >= half {
+        return match scene.output.smooth_estimators {
+            Some(true) => Err(SceneError::invalid(
+                "output.smooth_estimators",
+                format!(
+                    "the smooth potential's cut-off r_u = {cutoff} reaches half the shortest box \
+                     side {half:.6}: a body would interact with two images of another; use more \
+                     bodies or a smaller smd.smoothing.r_u"
+                ),
+            )),
+            _ => Ok(None),
+        };
+    }
+    Ok(Some(Box::new(crate::analysis::smooth::Estimator::new(
+        scene.species.len(),
+        pots,
+    ))))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn omegas_are_perpendicular_and_equipartitioned() {
+        let axes = random_axes(500, 3);
+        let inertia = vec![0.5; 500];
+        let w = equipartitioned_omegas(&axes, &inertia, 2.0, 3);
+        for (a, w) in axes.iter().zip(&w) {
+            assert!((a.length() - 1.0).abs() < 1e-15);
+            assert!(a.dot(*w).abs() < 1e-12 * w.length());
+        }
+        let k: f64 = w.iter().map(|w| 0.25 * w.length_squared()).sum();
+        assert!((k - 1000.0).abs() < 1e-9);
+        // Axes cover the sphere: mean of each component near zero, of its square near 1/3.
+        for c in 0..3 {
+            let m: f64 = axes.iter().map(|a| a[c]).sum::<f64>() / 500.0;
+            let m2: f64 = axes.iter().map(|a| a[c] * a[c]).sum::<f64>() / 500.0;
+            assert!(
+                m.abs() < 0.08 && (m2 - 1.0 / 3.0).abs() < 0.05,
+                "{c}: {m} {m2}"
+            );
+        }
+    }
+}

@@ -1,0 +1,159 @@
+//! Unit systems: the numbers of a scene, the numbers the simulator computes with, and the
+//! numbers it reports.
+//!
+//! A scene in **reduced** units is taken as it is (Boltzmann's constant 1). A scene in
+//! **molecular** units gives lengths in Å, masses in g/mol, energies in kJ/mol, times in ps,
+//! temperatures in K and moments of inertia in g/mol·Å² (003 §V gives its rods this way). The
+//! simulator then computes in Å, g/mol and ps, whose energy unit is
+//! `1 g/mol·Å²/ps² = 10 J/mol = 0.01 kJ/mol`: lengths, masses, times and inertia pass
+//! unchanged, energies are multiplied by 100 and temperatures by `R = 0.831446… (10 J/mol)/K`
+//! on the way in ([`Scene::internal`]), and the summary converts back (energies in kJ/mol,
+//! temperatures in K, pressures in bar).
+
+use crate::config::scene::{Scene, UnitSystem};
+
+/// Internal energy units per kJ/mol (the internal unit is 1 g/mol·Å²/ps² = 10 J/mol).
+pub const PER_KJ_PER_MOL: f64 = 100.0;
+
+/// The molar gas constant in internal energy units per kelvin (8.314462618 J/(mol K), CODATA
+/// 2018, exact in the SI).
+pub const GAS_CONSTANT: f64 = 0.831_446_261_815_324;
+
+/// Bar per internal pressure unit: `(10 J/mol) / Å³ / N_A = 1.66053906660·10⁷ Pa`.
+pub const BAR_PER_UNIT: f64 = 166.053_906_660;
+
+/// The factors of a scene's unit system.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Units {
+    /// The system.
+    pub system: UnitSystem,
+    /// Internal energy per scene energy.
+    pub energy: f64,
+    /// Internal `kT` per scene temperature.
+    pub temperature: f64,
+}
+
+impl Units {
+    /// The factors of `system`.
+    pub fn of(system: UnitSystem) -> Self {
+        match system {
+            UnitSystem::Reduced => Units {
+                system,
+                energy: 1.0,
+                temperature: 1.0,
+            },
+            UnitSystem::Molecular => Units {
+                system,
+                energy: PER_KJ_PER_MOL,
+                temperature: GAS_CONSTANT,
+            },
+        }
+    }
+
+    /// An internal energy in the scene's unit.
+    pub fn energy_out(&self, e: f64) -> f64 {
+        e / self.energy
+    }
+
+    /// An internal `kT` as a temperature in the scene's unit.
+    pub fn temperature_out(&self, kt: f64) -> f64 {
+        kt / self.temperature
+    }
+
+    /// An internal pressure in the reported unit (bar in molecular units).
+    pub fn pressure_out(&self, p: f64) -> f64 {
+        match self.system {
+            UnitSystem::Reduced => p,
+            UnitSystem::Molecular => p * BAR_PER_UNIT,
+        }
+    }
+
+    /// Names of the reported units: `(length, time, energy, temperature, pressure)`.
+    pub fn names(&self) -> [&'static str; 5] {
+        match self.system {
+            UnitSystem::Reduced => ["reduced"; 5],
+            UnitSystem::Molecular => ["Å", "ps", "kJ/mol", "K", "bar"],
+        }
+    }
+}
+
+impl Scene {
+    /// The same scene in the simulator's internal units (module documentation): energies and
+    /// temperatures scaled, everything else as it is.
+    pub fn internal(&self) -> Scene {
+        let u = Units::of(self.units);
+        if u.energy == 1.0 && u.temperature == 1.0 {
+            return self.clone();
+        }
+        let e = u.energy;
+        let mut s = self.clone();
+        for p in &mut s.pair {
+            for step in &mut p.steps {
+                step[1] *= e;
+            }
+            if let Some(pot) = &mut p.potential {
+                use crate::config::scene::PotentialSpec::*;
+                match pot {
+                    Rods { epsilon, .. } | LennardJones { epsilon, .. } => *epsilon *= e,
+                    GayBerne { epsilon0, .. } => *epsilon0 *= e,
+                }
+            }
+            if let Some(t) = &mut p.terraces {
+                let scale = |x: &mut Option<f64>| {
+                    if let Some(v) = x {
+                        *v *= e;
+                    }
+                };
+                scale(&mut t.step);
+                scale(&mut t.core);
+                scale(&mut t.outermost);
+                for list in [&mut t.levels, &mut t.energies].into_iter().flatten() {
+                    for v in list {
+                        *v *= e;
+                    }
+                }
+            }
+        }
+        // Issue 10: site–site steps are energies too.
+        for p in &mut s.site_pair {
+            for step in &mut p.steps {
+                step[1] *= e;
+            }
+        }
+        s.init.temperature *= u.temperature;
+        if let Some(t) = &mut s.thermostat.temperature {
+            *t *= u.temperature;
+        }
+        if let Some(t) = s.hmc.as_mut().and_then(|h| h.temperature.as_mut()) {
+            *t *= u.temperature;
+        }
+        // The grazing threshold of site molecules is a squared length, not an energy.
+        if let Some(sr) = &mut s.search
+            && !self.has_sites()
+            && let Some(g) = &mut sr.grid_threshold
+        {
+            *g *= e;
+        }
+        s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_papers_state_point_in_internal_units() {
+        let u = Units::of(UnitSystem::Molecular);
+        // T* = kT/ε = 1.4 with ε = 3 kJ/mol: T = 1.4 · 3000 / 8.314462618 K = 505.14 K.
+        let t = 1.4 * 3.0 * 1000.0 / 8.314_462_618_153_24;
+        let kt = t * u.temperature;
+        assert!((kt - 1.4 * 3.0 * PER_KJ_PER_MOL).abs() < 1e-9, "{kt}");
+        // Thermal speed of the rods, √(kT/m) with m = 18 g/mol: 4.83 Å/ps.
+        assert!(((kt / 18.0).sqrt() - 4.830_459).abs() < 1e-5);
+        assert!((u.temperature_out(kt) - t).abs() < 1e-12 * t);
+        assert_eq!(u.energy_out(300.0), 3.0);
+        // 1 kJ/mol/Å³ is 16 605.39 bar.
+        assert!((u.pressure_out(PER_KJ_PER_MOL) - 16_605.390_666).abs() < 1e-3);
+    }
+}

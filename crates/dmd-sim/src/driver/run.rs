@@ -1,0 +1,1316 @@
+//! Running a scene end to end: set-up, equilibration, production, summary and outputs.
+//!
+//! [`run_scene`] picks the interaction model (hard spheres, stepped, or terraced rods) and the
+//! queue once and hands over to a loop compiled for that pair; everything scene-specific
+//! happens here, around the loop, never inside it. Scenes in molecular units are converted to
+//! the internal units first and the summary back ([`units`](crate::config::units)).
+
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::time::Instant;
+
+use collide::Particle;
+use event_queue::{BoundedQueue, HeapQueue, LazyQueue, Ticket, TournamentTree};
+use glam::DVec3;
+use serde::Serialize;
+
+use crate::analysis::observable::{Correlations, Observers, Rdf, Series};
+use crate::analysis::output::{OutputError, Trajectory, write_atomically, write_csv};
+use crate::config::init::{Configuration, lattice, maxwell_boltzmann, read_orientations, read_xyz};
+use crate::config::rods::{
+    Plan, equipartitioned_omegas, random_axes, rod_species, search_settings,
+};
+use crate::config::scene::{
+    AcceptKind, EnsembleKind, Orientations, Positions, QueueKind, Scene, SceneError,
+    ThermostatKind, ThermostatPhase,
+};
+use crate::config::units::Units;
+use crate::driver::checkpoint::{
+    Checkpoint, CheckpointError, Every, Left, ObserverState, Problem, RunRecord, Saver,
+    SceneSource, Stage,
+};
+use crate::driver::hmc::{Acceptance, Chain, Ensemble, Faulty, HmcSettings, HmcSummary};
+use crate::driver::reporting::write_observables;
+pub use crate::driver::reporting::{Quiet, Reporter, RunError, thread_cpu_seconds, unit_names};
+use crate::engine::model::{HardSpheres, PairModel, Stepped};
+use crate::engine::schedule::Scheduler;
+use crate::engine::simulation::MAX_REBASE_EVENTS;
+use crate::engine::simulation::{Andersen, LoopSettings, Progress, SetupError, Simulation, Stop};
+use crate::models::search::SearchStats;
+use crate::models::terraced::{PairTable, Terraced};
+
+/// What a run does besides the scene (issue 9): checkpoints, and resuming from one.
+#[derive(Debug, Default)]
+pub struct RunOptions {
+    /// Write `DIR/checkpoint.dmd` this often (needs `source` and an output folder).
+    pub checkpoint_every: Option<Every>,
+    /// The scene's text and overrides, stored in checkpoints.
+    pub source: Option<SceneSource>,
+    /// Continue the run saved in this checkpoint (its file, and its contents).
+    pub resume: Option<(std::path::PathBuf, Checkpoint)>,
+    /// Stop right after the first checkpoint is written, outputs unfinished, as a crash then
+    /// would (tests of `dmd resume`).
+    pub halt_after_checkpoint: bool,
+}
+
+/// Energies, momentum and counters of a run, as written to `summary.json`. Units are the
+/// scene's (reduced, σ = m = kT = 1 by default; in molecular units energies in kJ/mol,
+/// temperatures in K, pressures in bar, times in ps, lengths in Å); all averages are over
+/// production.
+#[derive(Clone, Debug, Serialize)]
+pub struct Summary {
+    /// `dmd` (the standard-MD engine writes `smd`, issue 8).
+    pub engine: String,
+    /// Events of production (pair events, cell crossings, thermostat collisions).
+    pub events: u64,
+    /// Production events by kind, plus bookkeeping counts (`samples`, `rebases`).
+    pub events_by_kind: BTreeMap<String, u64>,
+    /// Events of equilibration.
+    pub equilibration_events: u64,
+    /// Wall-clock seconds of production.
+    pub wall_seconds: f64,
+    /// CPU seconds of production (the thread's run time; Linux only, else equal to the wall
+    /// time). On a shared machine this is the steadier measure of cost.
+    pub cpu_seconds: f64,
+    /// Production events per wall-clock second.
+    pub events_per_second: f64,
+    /// Production events per CPU second.
+    pub events_per_cpu_second: f64,
+    /// Pair events (collisions and step crossings) per wall-clock second.
+    pub pair_events_per_second: f64,
+    /// Simulated time of production.
+    pub sim_time: f64,
+    /// Number of bodies.
+    pub n_bodies: u64,
+    /// Number density N/V.
+    pub density: f64,
+    /// Box edge lengths.
+    pub box_lengths: [f64; 3],
+    /// Time-averaged kinetic temperature, `2⟨K⟩ / dof`.
+    pub temperature: f64,
+    /// Block-average error of the mean kinetic temperature, from the instantaneous one at
+    /// every sample (Flyvbjerg–Petersen, [`block_average`](crate::analysis::block::block_average);
+    /// `null` without `output.sample_interval` or with fewer than 16 samples).
+    pub temperature_error: Option<f64>,
+    /// Kinetic temperature `2K/dof` at the start of production: the bath temperature exactly
+    /// when a thermostatted equilibration ended with `thermostat.rescale_at_end` (default).
+    pub temperature_start: f64,
+    /// Degrees of freedom of the temperature (3N − 3 in NVE, 3N with a thermostat).
+    pub degrees_of_freedom: f64,
+    /// Pressure from the collision virial: `(N kT + Σ r_ij·Δp_i / 3t) / V`.
+    pub pressure: f64,
+    /// Ideal part of the pressure, `N kT / V`.
+    pub pressure_ideal: f64,
+    /// Excess (virial) part of the pressure.
+    pub pressure_excess: f64,
+    /// Block-average error of `pressure`, from its mean over each sampling interval.
+    pub pressure_error: Option<f64>,
+    /// Compressibility factor `Z = P V / (N kT)`.
+    pub compressibility: f64,
+    /// Mean time between pair events of a body, `N t / (2 × pair events)`.
+    pub mean_free_time: f64,
+    /// Pair events per body per unit time, `2 × pair events / (N t)`.
+    pub collision_rate: f64,
+    /// Kinetic energy at the end.
+    pub energy_kinetic: f64,
+    /// Potential energy at the end (from the stored pair levels).
+    pub energy_potential: f64,
+    /// Time-averaged potential energy per body.
+    pub potential_energy_per_body: f64,
+    /// Block-average error of `potential_energy_per_body`, from the samples.
+    pub potential_energy_per_body_error: Option<f64>,
+    /// Mean over the samples of the smooth potential energy per body (terraced rods and
+    /// Gay–Berne: the continuous potential, cut and switched as by the smd engine, evaluated
+    /// at the sampled configurations; `output.smooth_estimators`).
+    pub potential_energy_per_body_smooth: Option<f64>,
+    /// Its block-average error.
+    pub potential_energy_per_body_smooth_error: Option<f64>,
+    /// Mean over the samples of the smooth potential's pressure `(N kT_t + W/3)/V`, `W` its
+    /// molecular virial and `kT_t` the instantaneous translational temperature (the smd
+    /// engine's formula).
+    pub pressure_smooth: Option<f64>,
+    /// Its block-average error.
+    pub pressure_smooth_error: Option<f64>,
+    /// Total energy at the start of production.
+    pub energy_total_start: f64,
+    /// Total energy at the end.
+    pub energy_total_end: f64,
+    /// `|E_end − E_start|` relative to `max(|E_start|, K_start)`.
+    pub relative_energy_drift: f64,
+    /// `|P_end − P_start|` relative to `Σ m|v|` at the start.
+    pub momentum_drift: f64,
+    /// Anomalies counted (negative event times, overlaps, receding pairs); 0 in a healthy run.
+    pub anomalies: u64,
+    /// Anomalies by kind.
+    pub anomalies_by_kind: BTreeMap<String, u64>,
+    /// Interaction model used (`hard-spheres`, `stepped`, `terraced-rods`,
+    /// `terraced-gay-berne`, `rigid-sites`).
+    pub model: String,
+    /// The unit system of the numbers (`reduced` or `molecular`).
+    pub units: String,
+    /// Pair events (terrace crossings and reflections) per unit of simulated time: per ps in
+    /// molecular units (003 §V.B reports 4.7·10⁴ for its rods at ΔV = kT/2).
+    pub events_per_ps: f64,
+    /// Pair events per CPU second.
+    pub pair_events_per_cpu_second: f64,
+    /// Virtual events (root searches resumed at the end of their window, or started when a
+    /// pair comes within reach).
+    pub virtual_events: u64,
+    /// Terrace (or step) crossings, up and down.
+    pub terrace_crossings: u64,
+    /// Reflections, at finite steps and at the hard core.
+    pub reflections: u64,
+    /// Missed events detected during the run (rods): searches that found their pair off its
+    /// stored terrace, and events whose `U` was not at the predicted level beyond round-off.
+    pub detected_misses: u64,
+    /// Misses found by re-searching every interval on a fine grid (`search.verify_step`).
+    pub verified_misses: Option<u64>,
+    /// Counters of the root searches (rods).
+    pub search: Option<SearchStats>,
+    /// Translational temperature `2⟨K_trans⟩/(3N − 3)` (rods; equal to `temperature` for
+    /// spheres).
+    pub translational_temperature: f64,
+    /// Rotational temperature `⟨K_rot⟩/N` of rods (two degrees of freedom each).
+    pub rotational_temperature: Option<f64>,
+    /// Queue used.
+    pub queue: String,
+    /// Entries pushed into the scheduler (each body's earliest event, re-set at every change).
+    pub queue_pushed: u64,
+    /// Superseded scheduler entries dropped when popped (queues).
+    pub queue_stale_dropped: u64,
+    /// Superseded scheduler entries removed by sweeps (queues).
+    pub queue_stale_swept: u64,
+    /// Bodies rescheduled from their own event list because the partner of their earliest
+    /// event had changed (no rescan needed).
+    pub requeued: u64,
+    /// Self-diffusion coefficient from the MSD slope (when `output.msd` is on).
+    pub diffusion_msd: Option<f64>,
+    /// Self-diffusion coefficient from the Green–Kubo VACF integral (when `output.vacf` is on).
+    pub diffusion_vacf: Option<f64>,
+    /// The seed.
+    pub seed: u64,
+    /// Files written besides `summary.json`.
+    pub files: Vec<String>,
+    /// Hybrid Monte Carlo statistics (issue 9; only with `[hmc]`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub hmc: Option<HmcSummary>,
+    /// Largest relative bond-length error of the semi-flexible molecules at the end (at their
+    /// last event and interpolated to the end time; only with `bonds`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bond_error: Option<f64>,
+    /// What the RATTLE integration did (only with `bonds`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rattle: Option<crate::models::flexible::FlexStats>,
+}
+
+/// Runs a scene. `base` is the folder relative paths of the scene are read from; with
+/// `out = Some(dir)` the summary and every requested output are written there.
+///
+/// # Errors
+/// [`RunError`].
+pub fn run_scene(
+    scene: &Scene,
+    base: &Path,
+    out: Option<&Path>,
+    reporter: &mut dyn Reporter,
+) -> Result<Summary, RunError> {
+    run_scene_with(scene, base, out, reporter, &RunOptions::default())
+}
+
+/// [`run_scene`] with checkpoints, or continuing from one (`options.resume`: the scene must be
+/// the checkpoint's own).
+///
+/// # Errors
+/// [`RunError`].
+pub fn run_scene_with(
+    scene: &Scene,
+    base: &Path,
+    out: Option<&Path>,
+    reporter: &mut dyn Reporter,
+    options: &RunOptions,
+) -> Result<Summary, RunError> {
+    if scene.engine == crate::driver::smd_engine::Engine::Smd {
+        // Issue 8: never run an smd scene event-driven behind the caller's back.
+        return Err(SceneError::invalid(
+            "engine",
+            "this scene asks for the smd engine: run it with smd_engine::run (as `dmd run` does)",
+        )
+        .into());
+    }
+    let units = Units::of(scene.units);
+    let scene = &scene.internal();
+    let plan = Plan::of(scene)?;
+    // A lattice denser than the smallest hard core allows can hold no species; pairs of larger
+    // cores that end up too close are reported by the set-up.
+    let smallest_core = match &plan {
+        Plan::Spheres(potentials) => potentials
+            .all()
+            .iter()
+            .filter_map(|p| p.core())
+            .fold(f64::INFINITY, f64::min),
+        _ => 0.0,
+    };
+    let smallest_core = if smallest_core.is_finite() {
+        smallest_core
+    } else {
+        0.0
+    };
+    if let Some((path, c)) = &options.resume {
+        check_checkpoint_scene(scene, path, c)?;
+    }
+    let config = match (&options.resume, scene.init.positions) {
+        // Issue 9: a resumed run takes its configuration from the checkpoint.
+        (Some((_, c)), _) => Configuration {
+            lengths: c.sim.lengths,
+            positions: c.sim.bodies.iter().map(|b| b.r).collect(),
+            species: c.sim.bodies.iter().map(|b| b.species).collect(),
+            lattice_spacing: None,
+        },
+        (None, Positions::Fcc | Positions::Sc) => lattice(scene, smallest_core)?,
+        (None, Positions::File) => {
+            let file = scene.init.file.as_ref().expect("checked");
+            read_xyz(scene, &base.join(file))?
+        }
+    };
+    let masses: Vec<f64> = config
+        .species
+        .iter()
+        .map(|&s| scene.species[s as usize].mass)
+        .collect();
+    let velocities = maxwell_boltzmann(&masses, scene.init.temperature, scene.seed);
+    let n = config.positions.len();
+    let hard = matches!(&plan, Plan::Spheres(p) if p.all_hard_spheres());
+    let skin = match &options.resume {
+        Some((_, c)) => c.sim.settings.3,
+        None => choose_skin(scene, plan.reach(), hard, &config)?,
+    };
+    let mut settings = LoopSettings {
+        rebase_events: scene
+            .run
+            .rebase_events
+            .unwrap_or_else(|| (100 * n as u64).clamp(1_000_000, MAX_REBASE_EVENTS)),
+        seed: scene.seed.wrapping_add(0x7e57_0000_0000_0001),
+        debug_check_events: (n as u64).max(1000),
+        skin,
+        start_time: 0.0,
+    };
+    if let Some(dir) = out {
+        std::fs::create_dir_all(dir).map_err(|e| OutputError {
+            path: dir.to_owned(),
+            message: e.to_string(),
+        })?;
+    }
+    type Bounded = LazyQueue<BoundedQueue<Ticket>>;
+    type Heap = LazyQueue<HeapQueue<Ticket>>;
+    // Issue 9: HMC fault injection (a validation tool) wraps the general stepped model; missed
+    // events break the loop's invariants on purpose, so the debug checks are off.
+    let fault = scene.hmc.as_ref().map_or(0.0, |h| h.fault_fraction);
+    if fault > 0.0 {
+        settings.debug_check_events = 0;
+    }
+    let ctx = Context {
+        // Site molecules cannot be saved yet (checkpoints are refused for them below).
+        saveable: !matches!(plan, Plan::Sites(_) | Plan::Flexible(_)),
+        scene,
+        config: &config,
+        velocities: &velocities,
+        settings,
+        out,
+        units,
+        model_name: plan.name(),
+        options,
+        smooth: std::cell::Cell::new(None),
+    };
+    if fault > 0.0 {
+        // Checked with the scene: fault injection is for sphere scenes.
+        let Plan::Spheres(potentials) = plan else {
+            return Err(SceneError::invalid(
+                "hmc.fault_fraction",
+                "fault injection hides pairs of the analytic sphere models; it is not available \
+                 for rods"
+                    .to_owned(),
+            )
+            .into());
+        };
+        let particles: Vec<Particle> = scene
+            .species
+            .iter()
+            .map(|s| Particle::new(s.mass).expect("masses are checked"))
+            .collect();
+        let model = Faulty::new(Stepped::new(potentials, particles, n), fault, scene.seed);
+        let mut summary = ctx.go::<_, Heap>(model, reporter)?;
+        summary.model = "stepped (fault injection)".to_owned();
+        return Ok(summary);
+    }
+    match plan {
+        Plan::Spheres(potentials) => {
+            let particles: Vec<Particle> = scene
+                .species
+                .iter()
+                .map(|s| Particle::new(s.mass).expect("masses are checked"))
+                .collect();
+            match (hard, scene.run.queue) {
+                (true, QueueKind::Bounded) => {
+                    ctx.go::<_, Bounded>(HardSpheres::new(potentials, particles), reporter)
+                }
+                (true, QueueKind::Heap) => {
+                    ctx.go::<_, Heap>(HardSpheres::new(potentials, particles), reporter)
+                }
+                (true, QueueKind::Tournament) => {
+                    ctx.go::<_, TournamentTree>(HardSpheres::new(potentials, particles), reporter)
+                }
+                (false, QueueKind::Bounded) => {
+                    ctx.go::<_, Bounded>(Stepped::new(potentials, particles, n), reporter)
+                }
+                (false, QueueKind::Heap) => {
+                    ctx.go::<_, Heap>(Stepped::new(potentials, particles, n), reporter)
+                }
+                (false, QueueKind::Tournament) => {
+                    ctx.go::<_, TournamentTree>(Stepped::new(potentials, particles, n), reporter)
+                }
+            }
+        }
+        Plan::Rods(tables) => {
+            ctx.smooth.set(crate::config::rods::estimator(
+                scene,
+                config.lengths,
+                &tables,
+            )?);
+            let model = terraced_model(scene, base, &config, tables)?;
+            ctx.go_any_queue(model, reporter)
+        }
+        Plan::GayBerne(tables) => {
+            ctx.smooth.set(crate::config::rods::estimator(
+                scene,
+                config.lengths,
+                &tables,
+            )?);
+            let model = terraced_model(scene, base, &config, tables)?;
+            ctx.go_any_queue(model, reporter)
+        }
+        Plan::Sites(plan) => {
+            // Issue 10: their state cannot be restored from a checkpoint yet.
+            if options.checkpoint_every.is_some() {
+                return Err(SceneError::invalid(
+                    "checkpoint",
+                    "checkpoints are not available for rigid site molecules (their attitudes \
+                     and site-pair levels are not saved yet): run without --checkpoint-every",
+                )
+                .into());
+            }
+            let model = crate::config::site_scene::model(scene, &config, plan)?;
+            ctx.go_any_queue(model, reporter)
+        }
+        Plan::Flexible(plan) => {
+            if options.checkpoint_every.is_some() {
+                return Err(SceneError::invalid(
+                    "checkpoint",
+                    "checkpoints are not available for semi-flexible molecules (their internal \
+                     states and site-pair levels are not saved): run without --checkpoint-every",
+                )
+                .into());
+            }
+            let model = crate::config::flexible_scene::model(scene, &config, plan)?;
+            ctx.go_any_queue(model, reporter)
+        }
+    }
+}
+
+/// The terraced model of a rods scene: orientations and equipartitioned angular velocities.
+fn terraced_model<P: potential::PairPotential>(
+    scene: &Scene,
+    base: &Path,
+    config: &Configuration,
+    tables: Vec<PairTable<P>>,
+) -> Result<Terraced<P>, RunError> {
+    let n = config.positions.len();
+    let axes = match scene.init.orientations {
+        Orientations::Random => random_axes(n, scene.seed),
+        Orientations::Aligned => {
+            let a = glam::DVec3::from(scene.init.axis.expect("checked")).normalize();
+            vec![a; n]
+        }
+        Orientations::File => {
+            let file = scene.init.file.as_ref().expect("checked");
+            read_orientations(&base.join(file), n)?
+        }
+    };
+    let species = rod_species(scene);
+    let inertia: Vec<f64> = config
+        .species
+        .iter()
+        .map(|&s| species[s as usize].inertia)
+        .collect();
+    let omegas = equipartitioned_omegas(&axes, &inertia, scene.init.temperature, scene.seed);
+    Terraced::new(
+        species,
+        tables,
+        &config.species,
+        &axes,
+        &omegas,
+        0.0,
+        search_settings(scene),
+        scene.seed ^ 0x5ea2_c400_0000_0007,
+    )
+    .map_err(|e| SceneError::invalid("search", e.to_string()).into())
+}
+
+struct Context<'a> {
+    /// Whether the model's state can be saved in a checkpoint.
+    saveable: bool,
+    scene: &'a Scene,
+    config: &'a Configuration,
+    velocities: &'a [DVec3],
+    settings: LoopSettings,
+    out: Option<&'a Path>,
+    units: Units,
+    model_name: &'static str,
+    options: &'a RunOptions,
+    /// The smooth estimator of a terraced scene, taken by the run.
+    smooth: std::cell::Cell<Option<Box<dyn crate::analysis::smooth::Evaluate>>>,
+}
+
+impl Context<'_> {
+    fn go_any_queue<M: PairModel>(
+        &self,
+        model: M,
+        reporter: &mut dyn Reporter,
+    ) -> Result<Summary, RunError> {
+        match self.scene.run.queue {
+            QueueKind::Bounded => self.go::<_, LazyQueue<BoundedQueue<Ticket>>>(model, reporter),
+            QueueKind::Heap => self.go::<_, LazyQueue<HeapQueue<Ticket>>>(model, reporter),
+            QueueKind::Tournament => self.go::<_, TournamentTree>(model, reporter),
+        }
+    }
+
+    fn go<M: PairModel, Q: Scheduler>(
+        &self,
+        model: M,
+        reporter: &mut dyn Reporter,
+    ) -> Result<Summary, RunError> {
+        let scene = self.scene;
+        // Issue 9: a resumed run starts from its checkpoint's state and stage.
+        let resume = self.options.resume.as_ref();
+        let mut sim: Simulation<M, Q> = match resume {
+            Some((path, c)) => {
+                Simulation::from_state(model, &c.sim).map_err(|e| CheckpointError {
+                    path: path.clone(),
+                    problem: Problem::Inconsistent(e.to_string()),
+                })?
+            }
+            None => Simulation::new(
+                self.config.lengths,
+                &self.config.positions,
+                self.velocities,
+                &self.config.species,
+                model,
+                self.settings,
+            )
+            .map_err(|e| setup_error(scene, self.config, &self.units, e))?,
+        };
+        let every = resume.map_or(self.options.checkpoint_every, |(_, c)| {
+            self.options.checkpoint_every.or(c.every)
+        });
+        let source = resume
+            .map(|(_, c)| c.source.clone())
+            .or_else(|| self.options.source.clone());
+        let mut run = Driver {
+            saver: Saver::new(every, self.out.filter(|_| self.saveable), source),
+            record: resume.map(|(_, c)| c.record.clone()).unwrap_or_default(),
+            chain: resume.and_then(|(_, c)| c.chain.clone()).or_else(|| {
+                scene
+                    .hmc
+                    .as_ref()
+                    .map(|h| Chain::new(hmc_settings(scene), h.series))
+            }),
+            started: None,
+            events: 0,
+            halt: self.options.halt_after_checkpoint,
+        };
+        // With signal handlers installed every re-basing is a chance to stop (saved exactly).
+        let interruptible = crate::driver::interrupt::installed() && run.saver.can_save();
+        sim.set_pause_at_rebase((run.saver.active() || interruptible) && scene.hmc.is_none());
+
+        // Equilibration.
+        let andersen = (scene.thermostat.kind == ThermostatKind::Andersen).then(|| Andersen {
+            rate: scene.thermostat.rate.expect("checked"),
+            temperature: scene
+                .thermostat
+                .temperature
+                .unwrap_or(scene.init.temperature),
+        });
+        let eq_stop = match scene.run.equilibration_time {
+            Some(t) => Stop::Time(t),
+            None => Stop::Events(scene.run.equilibration_events),
+        };
+        let equilibrate = !matches!(eq_stop, Stop::Events(0) | Stop::Time(0.0));
+        let hmc_eq = scene.hmc.as_ref().map_or(0, |h| h.equilibration_segments);
+        let mut stage = match resume {
+            Some((_, c)) => c.stage,
+            None if equilibrate => Stage::Equilibration(left_of(eq_stop)),
+            None if hmc_eq > 0 => Stage::Equilibration(Left::Segments(hmc_eq)),
+            None => Stage::Production(Left::Events(0)),
+        };
+        if resume.is_none() && equilibrate {
+            run.record.had_thermostat = andersen.is_some();
+            if andersen.is_some() {
+                sim.set_thermostat(andersen);
+            }
+        }
+        if let Stage::Equilibration(left @ (Left::Events(_) | Left::Time(_))) = stage {
+            reporter.phase("equilibration", eq_stop);
+            run.plain(&mut sim, left, false, &mut Observers::default(), reporter)?;
+            reporter.done();
+            run.record.equilibration_events = sim.counters().events;
+            stage = if hmc_eq > 0 {
+                Stage::Equilibration(Left::Segments(hmc_eq))
+            } else {
+                Stage::Production(Left::Events(0))
+            };
+        }
+        let production_thermostat =
+            andersen.filter(|_| scene.thermostat.during == ThermostatPhase::Always);
+        let had_thermostat = run.record.had_thermostat;
+        let fresh_production =
+            !matches!(resume, Some((_, c)) if matches!(c.stage, Stage::Production(_)));
+        if fresh_production && had_thermostat != production_thermostat.is_some() {
+            sim.set_thermostat(production_thermostat);
+        }
+        if let Stage::Equilibration(Left::Segments(left)) = stage {
+            // HMC equilibration segments (not recorded).
+            if !sim.at_origin() {
+                sim.begin_phase(had_thermostat, None, None);
+                sim.move_origin_here();
+            }
+            reporter.phase("hmc equilibration", Stop::Events(hmc_eq));
+            run.segments(&mut sim, left, false, reporter)?;
+            reporter.done();
+        }
+
+        // Production.
+        let o = &scene.output;
+        let mut observers = Observers::default();
+        let lengths = self.config.lengths;
+        if let Some(rdf) = &o.rdf {
+            let half = 0.5 * lengths.min_element();
+            let r_max = rdf.r_max.unwrap_or(half.min(5.0));
+            if r_max > half {
+                return Err(SceneError::invalid(
+                    "output.rdf.r_max",
+                    format!("{r_max} exceeds half the smallest box side ({half})"),
+                )
+                .into());
+            }
+            observers.rdf = Some(Rdf::new(rdf.bins as usize, r_max, rdf.every));
+        }
+        if o.msd.is_some() || o.vacf.is_some() || o.orientation_acf.is_some() {
+            let lag = o
+                .msd
+                .iter()
+                .chain(o.vacf.iter())
+                .chain(o.orientation_acf.iter())
+                .map(|c| c.max_lag)
+                .fold(0.0, f64::max);
+            observers.correlations = Some(Correlations::with_orientations(
+                o.sample_interval.expect("checked"),
+                lag,
+                o.msd.is_some(),
+                o.vacf.is_some(),
+                o.orientation_acf.is_some(),
+            ));
+        }
+        if o.series {
+            observers.series = Some(Series::default());
+        }
+        if o.sample_interval.is_some() {
+            observers.samples = Some(crate::analysis::smooth::Samples::default());
+            observers.smooth = self.smooth.take();
+            observers.smooth_every = o
+                .smooth_every
+                .unwrap_or(crate::config::scene::DEFAULT_SMOOTH_EVERY);
+        }
+        observers.max_bytes = Some(crate::config::limits::max_bytes(scene));
+        let out = self.out;
+        if let (Some(_), Some(dir)) = (&o.trajectory, out) {
+            let names = scene.species.iter().map(|s| s.name.clone()).collect();
+            let path = dir.join("trajectory.xyz");
+            observers.trajectory = Some(match resume {
+                Some((_, c)) if !fresh_production => {
+                    let (len, frames) = c.observers.trajectory.unwrap_or((0, 0));
+                    Trajectory::reopen(&path, names, len, frames)?
+                }
+                _ => Trajectory::create(&path, names)?,
+            });
+        }
+        let stop = match (scene.run.events, scene.run.time, &scene.hmc) {
+            (_, _, Some(h)) => Stop::Events(h.segments),
+            (Some(e), _, _) => Stop::Events(e),
+            (None, Some(t), _) => Stop::Time(t),
+            (None, None, None) => unreachable!("checked"),
+        };
+        if fresh_production {
+            let wants_samples = observers.rdf.is_some()
+                || observers.correlations.is_some()
+                || observers.series.is_some()
+                || observers.samples.is_some();
+            sim.begin_phase(
+                had_thermostat && production_thermostat.is_none(),
+                o.sample_interval.filter(|_| wants_samples),
+                o.trajectory
+                    .as_ref()
+                    .filter(|_| out.is_some())
+                    .map(|t| t.interval),
+            );
+            if scene.hmc.is_some() {
+                sim.move_origin_here();
+            }
+            // NVE production starts at the bath temperature, not wherever the stochastic
+            // thermostat left the kinetic energy (as the smd engine's last rescaling does).
+            if had_thermostat
+                && scene.hmc.is_none()
+                && scene.thermostat.rescales_at_end()
+                && let Some(a) = andersen
+            {
+                sim.rescale_to_temperature(a.temperature);
+            }
+            let (p0, _) = sim.momentum_and_mass();
+            let k0 = sim.kinetic_energy();
+            run.record.start = Some((
+                k0,
+                k0 + sim.potential_energy(),
+                p0.to_array(),
+                sim.momentum_scale(),
+            ));
+            run.record.search_start = SearchStats::from_report(&sim.model().report());
+            stage = Stage::Production(match &scene.hmc {
+                Some(h) => Left::Segments(h.segments),
+                None => left_of(stop),
+            });
+        } else if let Some((_, c)) = resume {
+            observers.rdf = c.observers.rdf.clone();
+            observers.correlations = c.observers.correlations.clone();
+            observers.series = c.observers.series.clone();
+            observers.samples = c.observers.samples.clone();
+        }
+        let (k0, e0, p0, p_scale) = run.record.start.expect("set when production starts");
+        let p0 = DVec3::from_array(p0);
+        let search0 = run.record.search_start;
+        reporter.phase(
+            if scene.hmc.is_some() {
+                "hmc production"
+            } else {
+                "production"
+            },
+            stop,
+        );
+        let wall = Instant::now();
+        let cpu0 = thread_cpu_seconds();
+        let (wall_before, cpu_before) = run.record.seconds;
+        run.started = Some((wall, cpu0));
+        match stage {
+            Stage::Production(Left::Segments(left)) => {
+                if let Some(c) = &mut run.chain {
+                    c.recording = true;
+                }
+                run.segments(&mut sim, left, true, reporter)?;
+            }
+            Stage::Production(left) => run.plain(&mut sim, left, true, &mut observers, reporter)?,
+            Stage::Equilibration(_) => unreachable!("equilibration ended above"),
+        }
+        let wall_seconds = wall_before + wall.elapsed().as_secs_f64();
+        let cpu_seconds = cpu_before
+            + match (cpu0, thread_cpu_seconds()) {
+                (Some(a), Some(b)) => b - a,
+                _ => wall.elapsed().as_secs_f64(),
+            };
+        reporter.done();
+
+        // Summary.
+        let counters = sim.counters();
+        let anomalies = sim.anomalies();
+        let n = sim.bodies().len() as f64;
+        let volume = lengths.x * lengths.y * lengths.z;
+        let t = sim.phase_elapsed();
+        let k1 = sim.kinetic_energy();
+        let u1 = sim.potential_energy();
+        let e1 = k1 + u1;
+        let (p1, _) = sim.momentum_and_mass();
+        let dof = sim.dof();
+        let mean_k = if t > 0.0 {
+            sim.kinetic_integral() / t
+        } else {
+            k1
+        };
+        let kt = 2.0 * mean_k / dof;
+        let mean_rot = if t > 0.0 {
+            sim.rotational_kinetic_integral() / t
+        } else {
+            sim.model().rotational_kinetic()
+        };
+        let rot_dof = sim.model().rotational_dof();
+        let kt_trans = 2.0 * (mean_k - mean_rot) / (dof - rot_dof);
+        let search = sim.model().report();
+        let search = SearchStats::from_report(&search)
+            .zip(search0)
+            .map(|(a, b)| a.since(&b));
+        let u = self.units;
+        let excess = if t > 0.0 {
+            sim.virial() / (3.0 * t * volume)
+        } else {
+            f64::NAN
+        };
+        let ideal = n * kt / volume;
+        let pair_events = counters.pair_events();
+        let by_kind: BTreeMap<String, u64> = [
+            ("core", counters.core),
+            ("step_in", counters.step_in),
+            ("step_out", counters.step_out),
+            ("step_reflect", counters.step_reflect),
+            ("shell_crossing", counters.shell),
+            ("thermostat", counters.thermostat),
+            ("virtual", counters.virtual_),
+            ("samples", counters.samples),
+            ("rebases", counters.rebases),
+        ]
+        .into_iter()
+        .map(|(k, v)| (k.to_owned(), v))
+        .collect();
+        let anomalies_by_kind: BTreeMap<String, u64> = [
+            ("negative_time", anomalies.negative_time),
+            ("overlap", anomalies.overlap),
+            ("receding", anomalies.receding),
+            (
+                "search_failures",
+                search.map_or(0, |s: SearchStats| s.failures),
+            ),
+        ]
+        .into_iter()
+        .map(|(k, v)| (k.to_owned(), v))
+        .collect();
+        let qs = sim.schedule_stats();
+        let sampled = observers.samples.as_ref().map(|s| s.summary(n as usize));
+        let mut summary = Summary {
+            engine: "dmd".to_owned(),
+            events: counters.events,
+            events_by_kind: by_kind,
+            equilibration_events: run.record.equilibration_events,
+            wall_seconds,
+            cpu_seconds,
+            events_per_second: counters.events as f64 / wall_seconds,
+            events_per_cpu_second: counters.events as f64 / cpu_seconds,
+            pair_events_per_second: pair_events as f64 / wall_seconds,
+            sim_time: t,
+            n_bodies: n as u64,
+            density: n / volume,
+            box_lengths: lengths.to_array(),
+            temperature: u.temperature_out(kt),
+            temperature_start: u.temperature_out(2.0 * k0 / dof),
+            temperature_error: sampled.map(|s| u.temperature_out(s.temperature.error)),
+            degrees_of_freedom: dof,
+            pressure: u.pressure_out(ideal + excess),
+            pressure_ideal: u.pressure_out(ideal),
+            pressure_excess: u.pressure_out(excess),
+            pressure_error: sampled.map(|s| u.pressure_out(s.pressure.error)),
+            compressibility: (ideal + excess) * volume / (n * kt),
+            mean_free_time: n * t / (2.0 * pair_events as f64),
+            collision_rate: 2.0 * pair_events as f64 / (n * t),
+            energy_kinetic: u.energy_out(k1),
+            energy_potential: u.energy_out(u1),
+            potential_energy_per_body: u.energy_out(if t > 0.0 {
+                sim.potential_integral() / t / n
+            } else {
+                u1 / n
+            }),
+            potential_energy_per_body_error: sampled
+                .map(|s| u.energy_out(s.potential_per_body.error)),
+            potential_energy_per_body_smooth: sampled
+                .and_then(|s| s.potential_smooth_per_body)
+                .map(|b| u.energy_out(b.mean)),
+            potential_energy_per_body_smooth_error: sampled
+                .and_then(|s| s.potential_smooth_per_body)
+                .map(|b| u.energy_out(b.error)),
+            pressure_smooth: sampled
+                .and_then(|s| s.pressure_smooth)
+                .map(|b| u.pressure_out(b.mean)),
+            pressure_smooth_error: sampled
+                .and_then(|s| s.pressure_smooth)
+                .map(|b| u.pressure_out(b.error)),
+            energy_total_start: u.energy_out(e0),
+            energy_total_end: u.energy_out(e1),
+            relative_energy_drift: (e1 - e0).abs() / e0.abs().max(k0),
+            momentum_drift: (p1 - p0).length() / p_scale,
+            anomalies: anomalies.total() + search.map_or(0, |s| s.failures),
+            anomalies_by_kind,
+            model: self.model_name.to_owned(),
+            units: match scene.units {
+                crate::config::scene::UnitSystem::Reduced => "reduced",
+                crate::config::scene::UnitSystem::Molecular => "molecular",
+            }
+            .to_owned(),
+            events_per_ps: pair_events as f64 / t,
+            pair_events_per_cpu_second: pair_events as f64 / cpu_seconds,
+            virtual_events: counters.virtual_,
+            terrace_crossings: counters.step_in + counters.step_out,
+            reflections: counters.core + counters.step_reflect,
+            detected_misses: search.map_or(0, |s| s.off_terrace + s.misfits),
+            verified_misses: search.filter(|s| s.verified > 0).map(|s| s.verify_misses),
+            search,
+            translational_temperature: u.temperature_out(kt_trans),
+            rotational_temperature: (rot_dof > 0.0)
+                .then(|| u.temperature_out(2.0 * mean_rot / rot_dof)),
+            queue: match scene.run.queue {
+                QueueKind::Bounded => "bounded",
+                QueueKind::Heap => "heap",
+                QueueKind::Tournament => "tournament",
+            }
+            .to_owned(),
+            queue_pushed: qs.pushed,
+            queue_stale_dropped: qs.stale_dropped,
+            queue_stale_swept: qs.stale_swept,
+            requeued: qs.requeued,
+            diffusion_msd: observers
+                .correlations
+                .as_ref()
+                .filter(|c| c.wants_msd())
+                .and_then(Correlations::diffusion_from_msd),
+            diffusion_vacf: observers
+                .correlations
+                .as_ref()
+                .filter(|c| c.wants_vacf())
+                .and_then(Correlations::diffusion_from_vacf),
+            seed: scene.seed,
+            files: Vec::new(),
+            hmc: run
+                .chain
+                .as_ref()
+                .map(|c| hmc_out(c.summary(n as usize), &u)),
+            bond_error: sim.model().bond_error_at(sim.now()),
+            rattle: crate::models::flexible::FlexStats::from_report(&sim.model().report()),
+        };
+        if let Some(dir) = out {
+            summary.files = write_observables(dir, &mut observers, o.plots, &self.units)?;
+            if let Some(series) = run.chain.as_ref().and_then(|c| c.series.as_ref()) {
+                write_hmc_series(&dir.join("hmc.csv"), series, &self.units)?;
+                summary.files.push("hmc.csv".to_owned());
+            }
+            let json = serde_json::to_string_pretty(&summary).expect("a summary serialises");
+            write_atomically(&dir.join("summary.json"), json.as_bytes())?;
+        }
+        Ok(summary)
+    }
+}
+
+// ----- Checkpoints and HMC segments (issue 9) ---------------------------------------------------
+
+/// Runs the phases of a scene in pieces, saving checkpoints between them.
+struct Driver {
+    saver: Saver,
+    record: RunRecord,
+    chain: Option<Chain>,
+    /// When production started in this process (wall clock, thread CPU seconds).
+    started: Option<(Instant, Option<f64>)>,
+    /// Events executed by this process (the checkpoint interval counts them).
+    events: u64,
+    /// Stop after the first checkpoint.
+    halt: bool,
+}
+
+impl Driver {
+    /// Runs plain dynamics for `left`, pausing at re-basings to save checkpoints when due.
+    fn plain<M: PairModel, Q: Scheduler>(
+        &mut self,
+        sim: &mut Simulation<M, Q>,
+        mut left: Left,
+        production: bool,
+        observers: &mut Observers,
+        reporter: &mut dyn Reporter,
+    ) -> Result<(), RunError> {
+        loop {
+            let stop = match left {
+                Left::Events(n) => Stop::Events(n),
+                Left::Time(t) => Stop::Time(t),
+                Left::Segments(_) => unreachable!("segments are run by `segments`"),
+            };
+            let before = sim.counters().events;
+            sim.run(stop, observers, &mut |p| reporter.progress(p))?;
+            let done = sim.counters().events - before;
+            self.events += done;
+            if !sim.take_paused() {
+                return Ok(());
+            }
+            left = match left {
+                Left::Events(n) => Left::Events(n - done),
+                _ => Left::Time(sim.remaining_time()),
+            };
+            let stage = if production {
+                Stage::Production(left)
+            } else {
+                Stage::Equilibration(left)
+            };
+            self.checkpoint(sim, stage, observers)?;
+        }
+    }
+
+    /// Runs `left` HMC segments, saving checkpoints between them when due.
+    fn segments<M: PairModel, Q: Scheduler>(
+        &mut self,
+        sim: &mut Simulation<M, Q>,
+        left: u64,
+        production: bool,
+        reporter: &mut dyn Reporter,
+    ) -> Result<(), RunError> {
+        for k in 0..left {
+            let chain = self.chain.as_mut().expect("a scene with [hmc] has a chain");
+            let seg = chain.segment(sim)?;
+            self.events += seg.events;
+            reporter.progress(Progress {
+                events: if production {
+                    chain.stats.segments
+                } else {
+                    k + 1
+                },
+                elapsed: sim.phase_elapsed(),
+            });
+            let rest = left - k - 1;
+            if rest > 0 {
+                let stage = if production {
+                    Stage::Production(Left::Segments(rest))
+                } else {
+                    Stage::Equilibration(Left::Segments(rest))
+                };
+                self.checkpoint(sim, stage, &mut Observers::default())?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Saves a checkpoint if one is due (the simulation is at a re-basing).
+    fn checkpoint<M: PairModel, Q: Scheduler>(
+        &mut self,
+        sim: &Simulation<M, Q>,
+        stage: Stage,
+        observers: &mut Observers,
+    ) -> Result<(), RunError> {
+        let interrupted = crate::driver::interrupt::requested();
+        if !interrupted && !self.saver.due(self.events) {
+            return Ok(());
+        }
+        if interrupted && !self.saver.can_save() {
+            return Err(RunError::Interrupted { checkpoint: None });
+        }
+        let mut record = self.record.clone();
+        if let Some((wall, cpu0)) = self.started {
+            record.seconds.0 += wall.elapsed().as_secs_f64();
+            record.seconds.1 += match (cpu0, thread_cpu_seconds()) {
+                (Some(a), Some(b)) => b - a,
+                _ => wall.elapsed().as_secs_f64(),
+            };
+        }
+        let trajectory = match &mut observers.trajectory {
+            Some(t) => Some(t.mark()?),
+            None => None,
+        };
+        let chain = &self.chain;
+        self.saver.save(self.events, |source, every| {
+            Ok(Checkpoint {
+                source,
+                every,
+                stage,
+                sim: sim.save_state(),
+                record,
+                observers: ObserverState {
+                    rdf: observers.rdf.clone(),
+                    correlations: observers.correlations.clone(),
+                    series: observers.series.clone(),
+                    trajectory,
+                    samples: observers.samples.clone(),
+                },
+                chain: chain.clone(),
+            })
+        })?;
+        if self.halt {
+            return Err(RunError::Halted);
+        }
+        if interrupted {
+            return Err(RunError::Interrupted {
+                checkpoint: self.saver.path.clone(),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// A checkpoint's bodies must be the scene's (count and species) before anything is built.
+fn check_checkpoint_scene(
+    scene: &Scene,
+    path: &Path,
+    c: &Checkpoint,
+) -> Result<(), CheckpointError> {
+    let bad = |m: String| CheckpointError {
+        path: path.to_owned(),
+        problem: Problem::Inconsistent(crate::engine::simulation::StateError(m).to_string()),
+    };
+    let n = scene.n_bodies();
+    if c.sim.bodies.len() as u64 != n {
+        return Err(bad(format!(
+            "it has {} bodies, the scene {n}",
+            c.sim.bodies.len()
+        )));
+    }
+    for (s, sp) in scene.species.iter().enumerate() {
+        let have = c
+            .sim
+            .bodies
+            .iter()
+            .filter(|b| b.species == s as u32)
+            .count() as u64;
+        if have != sp.count {
+            return Err(bad(format!(
+                "it has {have} bodies of species `{}`, the scene {}",
+                sp.name, sp.count
+            )));
+        }
+    }
+    // The stage must be one this scene has (a hand-edited or foreign file must not reach a
+    // broken invariant of the driver).
+    let hmc = scene.hmc.is_some();
+    if let Stage::Equilibration(Left::Time(t)) | Stage::Production(Left::Time(t)) = c.stage
+        && !(t.is_finite() && t >= 0.0)
+    {
+        return Err(bad(format!("the time left of its phase is {t}")));
+    }
+    let fits = match c.stage {
+        Stage::Equilibration(Left::Segments(_)) | Stage::Production(Left::Segments(_)) => hmc,
+        Stage::Production(_) => !hmc,
+        Stage::Equilibration(_) => true,
+    };
+    if !fits {
+        return Err(bad(format!(
+            "its stage {:?} does not belong to a scene {} [hmc]",
+            c.stage,
+            if hmc { "with" } else { "without" }
+        )));
+    }
+    if hmc != c.chain.is_some() {
+        return Err(bad("its HMC chain does not match the scene's [hmc]".into()));
+    }
+    if matches!(c.stage, Stage::Production(_)) && c.record.start.is_none() {
+        return Err(bad(
+            "it is in production but has no record of its start".into()
+        ));
+    }
+    Ok(())
+}
+
+fn left_of(stop: Stop) -> Left {
+    match stop {
+        Stop::Events(n) => Left::Events(n),
+        Stop::Time(t) => Left::Time(t),
+    }
+}
+
+/// The chain settings of a scene with `[hmc]`.
+fn hmc_settings(scene: &Scene) -> HmcSettings {
+    let h = scene.hmc.as_ref().expect("a scene with [hmc]");
+    HmcSettings {
+        ensemble: match h.ensemble {
+            EnsembleKind::Canonical => Ensemble::Canonical,
+            EnsembleKind::Microcanonical => Ensemble::Microcanonical,
+        },
+        segment_time: h.segment_time,
+        temperature: h.temperature.unwrap_or(scene.init.temperature),
+        exchanges: h.exchanges.unwrap_or_else(|| scene.n_bodies()),
+        tolerance: h.tolerance,
+        acceptance: match h.accept {
+            AcceptKind::Metropolis => Acceptance::Metropolis,
+            AcceptKind::Always => Acceptance::Always,
+        },
+        histogram_bins: h.histogram_bins as usize,
+        histogram_range: h.histogram_range,
+        seed: scene.seed,
+    }
+}
+
+/// `hmc.csv`: one row per production segment (outcome: 0 accepted, 1 overlap, 2 energy,
+/// 3 non-finite).
+/// The HMC summary in the scene's units (energies and the temperature; `ΔH` histograms and
+/// `e^{−βΔH}` are dimensionless or counts).
+fn hmc_out(mut h: HmcSummary, u: &Units) -> HmcSummary {
+    h.temperature = u.temperature_out(h.temperature);
+    h.delta_h_mean = u.energy_out(h.delta_h_mean);
+    h.delta_h_max_abs = u.energy_out(h.delta_h_max_abs);
+    h.delta_h_histogram.low = u.energy_out(h.delta_h_histogram.low);
+    h.delta_h_histogram.high = u.energy_out(h.delta_h_histogram.high);
+    for b in [
+        &mut h.potential_energy_per_body,
+        &mut h.kinetic_energy_per_body,
+    ] {
+        b.mean = u.energy_out(b.mean);
+        b.error = u.energy_out(b.error);
+    }
+    h
+}
+
+fn write_hmc_series(
+    path: &Path,
+    series: &[crate::driver::hmc::Segment],
+    u: &Units,
+) -> Result<(), OutputError> {
+    use crate::driver::hmc::Outcome;
+    let rows: Vec<Vec<f64>> = series
+        .iter()
+        .map(|s| {
+            vec![
+                s.index as f64,
+                f64::from(u8::from(s.outcome == Outcome::Accepted)),
+                match s.outcome {
+                    Outcome::Accepted => 0.0,
+                    Outcome::Overlap => 1.0,
+                    Outcome::Energy => 2.0,
+                    Outcome::NonFinite => 3.0,
+                },
+                u.energy_out(s.delta_h),
+                u.energy_out(s.kinetic),
+                u.energy_out(s.potential),
+                s.events as f64,
+                s.mismatched as f64,
+                s.overlaps as f64,
+            ]
+        })
+        .collect();
+    write_csv(
+        path,
+        &[
+            "segment",
+            "accepted",
+            "outcome",
+            "delta_h",
+            "kinetic",
+            "potential",
+            "events",
+            "mismatched",
+            "overlaps",
+        ],
+        &rows,
+    )
+}
+
+/// The neighbour-list skin: `run.skin`, or by default 0.3 × the Boltzmann mean free path
+/// `1/(√2 π ρ R²)` at the largest reach `R`, kept between R/4 (hard spheres) or R/10 (stepped
+/// potentials) and 2R, and reduced to fit three cells of `R + 2δ` along the shortest box side.
+/// (Measured optima with N = 4000: hard spheres δ ≈ 0.2–0.3 at ρ = 0.5–0.94, 0.5–1 at ρ = 0.1,
+/// 1–2 at ρ = 0.01; square well λ = 1.5 at ρ = 0.5: 0.2; stepped Lennard-Jones at ρ = 0.5:
+/// 0.1 or less; see docs/PERFORMANCE.md.)
+fn choose_skin(
+    scene: &Scene,
+    reach: f64,
+    hard: bool,
+    config: &Configuration,
+) -> Result<f64, SceneError> {
+    let l = config.lengths;
+    let fit = (l.min_element() / 3.0 - reach) / 2.0;
+    if fit < 0.01 * reach {
+        let a = (0..3).min_by(|&a, &b| l[a].total_cmp(&l[b])).unwrap_or(0);
+        return Err(SceneError::invalid(
+            "box",
+            format!(
+                "the box side {:.6} along {} is less than 3 × the interaction range {reach} \
+                 (= {:.6}) plus the neighbour-list skin: the cell list needs three cells along \
+                 each axis; use more bodies or a lower density",
+                l[a],
+                ['x', 'y', 'z'][a],
+                3.0 * reach
+            ),
+        ));
+    }
+    if let Some(skin) = scene.run.skin {
+        let least = crate::config::limits::MIN_SKIN_FRACTION * reach;
+        if skin < least {
+            return Err(SceneError::invalid(
+                "run.skin",
+                format!(
+                    "{} is too thin: at least {} of the interaction reach {} (= {}), or every \
+                     move across the reach costs more than a thousand list rebuilds; leave it \
+                     out for the automatic skin",
+                    crate::config::limits::short(skin),
+                    crate::config::limits::short(crate::config::limits::MIN_SKIN_FRACTION),
+                    crate::config::limits::short(reach),
+                    crate::config::limits::short(least)
+                ),
+            ));
+        }
+        if skin > fit {
+            return Err(SceneError::invalid(
+                "run.skin",
+                format!(
+                    "{skin} is too large for this box: three cells of reach + 2 skin must fit \
+                     along the shortest side {}, so the skin can be at most {fit:.6}",
+                    l.min_element()
+                ),
+            ));
+        }
+        return Ok(skin);
+    }
+    let rho = config.positions.len() as f64 / (l.x * l.y * l.z);
+    let mean_free_path =
+        1.0 / (std::f64::consts::SQRT_2 * std::f64::consts::PI * rho * reach * reach);
+    // Stepped potentials have many more pair events per unit of path than hard spheres, so
+    // list rebuilds are relatively rarer and a thinner skin (fewer candidates) pays.
+    let lower = if hard { 0.25 } else { 0.1 };
+    let skin = (0.3 * mean_free_path).clamp(lower * reach, 2.0 * reach);
+    Ok(skin.min(0.999 * fit))
+}
+
+fn setup_error(scene: &Scene, config: &Configuration, units: &Units, e: SetupError) -> RunError {
+    let name = |k: &u32| &scene.species[config.species[*k as usize] as usize].name;
+    let (key, problem) = match (&e, scene.init.positions) {
+        (SetupError::BoxTooSmall { .. }, _) => ("box", e.to_string()),
+        (SetupError::InsideCore { i, j, energy, core }, positions) => {
+            let what = format!(
+                "bodies {i} ({}) and {j} ({}) start with pair energy {:.6}, at or above the \
+                 hard-core level {} of the terraces",
+                name(i),
+                name(j),
+                units.energy_out(*energy),
+                units.energy_out(*core)
+            );
+            match positions {
+                Positions::File => (
+                    "init.file",
+                    format!("overlapping initial configuration: {what}"),
+                ),
+                _ => (
+                    "box.density",
+                    format!(
+                        "density too high for this lattice: {what}; lower the density or start \
+                         from a file"
+                    ),
+                ),
+            }
+        }
+        (SetupError::Overlap { .. }, Positions::File) => (
+            "init.file",
+            format!("overlapping initial configuration: {e}"),
+        ),
+        (
+            SetupError::Overlap {
+                i,
+                j,
+                distance,
+                core,
+            },
+            _,
+        ) => (
+            "box.density",
+            format!(
+                "density too high for this lattice: it puts bodies {i} ({}) and {j} ({}) \
+                     {distance:.6} apart, less than their hard-core diameter {core}; lower the \
+                     density or start from a file",
+                name(i),
+                name(j)
+            ),
+        ),
+        _ => ("init.positions", e.to_string()),
+    };
+    SceneError::invalid(key, problem).into()
+}

@@ -1,0 +1,1979 @@
+//! Rigid site-based molecules (seed 000): point atoms ("sites") fixed in a rigid body, moving
+//! exactly between events, interacting through stepped radial potentials between the sites of
+//! different molecules (hard cores, square wells, several steps per pair of site species).
+//!
+//! **Molecule types.** [`MoleculeType::new`] takes the atoms (mass, site species, position in
+//! any frame), puts the centre of mass at the origin and diagonalises the inertia tensor once
+//! (cyclic Jacobi); the body frame is the principal frame, with the moments in increasing
+//! order. Moments equal to within [`MOMENT_SNAP`] of the largest are made exactly equal, so that
+//! a methane-like molecule is a spherical rotor and a benzene-like ring a symmetric top (the
+//! cheap exact propagators of `rigid_free`) rather than asymmetric tops whose moments differ in
+//! the last bits; a molecule whose smallest moment is below that is linear (a dumbbell: its
+//! spin about the axis carries no site and is dropped, 003 §V).
+//!
+//! [`Sites`] is the [`PairModel`]. It keeps, indexed like the loop's bodies:
+//!
+//! - the free motion of every molecule, a [`FreeMotion`] set up at the molecule's last change
+//!   with the time of that change (its rotational clock): symmetric and asymmetric tops follow
+//!   their exact closed forms (000 §II.B);
+//! - the level of every site pair of every pair of molecules that has one off level 0 (changed
+//!   only by executed events, never recomputed from a distance at a boundary);
+//! - per owner and partner, what the last prediction found: the search state of every site
+//!   pair (a virtual event resumes them, 000 §III.B) or the site pair of the pending event.
+//!
+//! **Event search (000 §III.A).** A site pair `(α, β)` on level `s` of its stepped potential
+//! (inner radius `r_in`, outer `r_out`) has its next event when `d² = |r_iα − r_jβ|²` leaves
+//! `(r_in², r_out²)`. The indicator watches both boundaries at once,
+//!
+//! ```text
+//! g(t) = (d² − r_in²)(r_out² − d²) / (r_out² − r_in²)      (d² − r_in² on level 0,
+//!                                                           r_out² − d² without inner step)
+//! ```
+//!
+//! positive inside, zero at either radius, with `ġ` from `d(d²)/dt = 2 r_αβ·u_αβ`,
+//! `u_αβ = v_ij + ω_i × d_iα − ω_j × d_jβ`. Its falling crossing is searched by
+//! `root_search` ([`SearchMethod::Adaptive`] or the uniform [`SearchMethod::Grid`] with a
+//! grazing threshold in units of `g`, i.e. length²). Each search is bracketed analytically by
+//! the bounding spheres: the sites are within `ρ_α = |d_iα|` and `ρ_β` of their centres, so the
+//! pair can only be at a radius `R` of the band while the centres are within `R + ρ_α + ρ_β`
+//! (`bracket` solves that quadratic without cancellation). A pair of molecules that is not yet
+//! within the largest such radius gets a virtual event when it arrives; there every site pair
+//! gets its own bracket, and the earliest root over all site pairs is the pair's event. With a
+//! finite [`SearchSettings::window`] each site pair's search stops at `now + window`, and the
+//! molecule pair's next event is a virtual one at the earliest stopped search, unless a root
+//! was found before it; the virtual event resumes exactly the stopped searches (bit for bit,
+//! `root_search::Method::resume`).
+//!
+//! **Impulses.** [`ImpulseRule::ContactPoint`] applies 000 §IV.B through `collide::contact` (the
+//! impulse along the line joining the two sites, at their arms from the centres); the
+//! [`ImpulseRule::Constrained`] option applies the constrained-Lagrangian rule of 000 §IV.A
+//! (`collide::ConstraintSolver`) to the atoms with a rigid framework of `3n − 6` distance
+//! constraints (one for a dumbbell), and recovers the centre velocity and angular velocity from
+//! the atoms' new velocities. The two are the same physics; [`Sites::set_cross_check`] runs both
+//! at every event and records how far apart they land ([`CrossCheck`]). A planar molecule of
+//! more than two atoms cannot be held rigid by distance constraints to first order (every
+//! atom can move out of the plane), and a collinear one of more than two atoms has dependent
+//! constraints: for those the constrained rule is refused at construction.
+//!
+//! **Checks.** As in the `terraced` model: a search that starts with its site pair off
+//! the stored level (beyond round-off) counts `off_terrace` (the trace of a missed event), an
+//! executed event whose site distance is not at the boundary counts a `misfit`, and
+//! [`SearchSettings::verify_step`] searches every interval again on a fine grid and counts the
+//! roots the search missed.
+
+use collide::{
+    Body as CollideBody, Bond, CollideError, ConstraintSolver, Contact, LinearBody, Molecule,
+    Outcome, RigidBody, Velocity, contact,
+};
+use glam::{DMat3, DQuat, DVec3};
+use rand::{RngExt, SeedableRng};
+use rand_distr::{Distribution, StandardNormal};
+use rand_xoshiro::Xoshiro256PlusPlus;
+use rigid_free::{FreeMotion, Moments};
+use root_search::{Adaptive, Crossing, Grid, Method, SearchError};
+
+use crate::engine::event::{Boundary, Kind};
+use crate::engine::model::{Executed, PairClass, PairModel, PairSetupError, Report};
+use crate::engine::pair_state::{SavedSearches, SiteLevels};
+use crate::engine::potential::Potentials;
+use crate::models::search::{SearchMethod, SearchSettings, SearchStats, bracket, check_settings};
+use crate::models::site_pairs::{Band, SITE_OVERLAP_TOLERANCE, SiteAtom, SiteSearch};
+
+/// Moments within this fraction of the largest are made equal (and a smallest moment below it
+/// is zero: a linear molecule). Far above the round-off of the Jacobi rotations (1e-15), far
+/// below anything physical.
+pub const MOMENT_SNAP: f64 = 1e-10;
+
+/// Why a molecule type or a site model could not be built.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SitesError {
+    /// Fewer than two atoms.
+    #[error("a molecule needs at least two atoms, got {0}")]
+    TooFewAtoms(usize),
+    /// A mass is not positive and finite.
+    #[error("atom {atom}: mass {mass} must be positive and finite")]
+    Mass {
+        /// The atom.
+        atom: usize,
+        /// The mass.
+        mass: f64,
+    },
+    /// A position is not finite.
+    #[error("atom {0}: position is not finite")]
+    Position(usize),
+    /// Two atoms at the same place.
+    #[error("atoms {0} and {1} coincide")]
+    Coincident(usize, usize),
+    /// The principal moments are unusable (collinear atoms of a molecule whose moments
+    /// `rigid_free` refuses, say).
+    #[error("principal moments {moments:?}: {problem}")]
+    Moments {
+        /// The moments.
+        moments: [f64; 3],
+        /// What is wrong.
+        problem: String,
+    },
+    /// A site species has no potential with another.
+    #[error("site species {0} has no potential table (there are {1} site species)")]
+    SiteSpecies(u32, usize),
+    /// A body names a molecule type that does not exist.
+    #[error("body {body}: molecule type {kind} does not exist")]
+    Type {
+        /// The body.
+        body: usize,
+        /// The type it names.
+        kind: u32,
+    },
+    /// A body's orientation or angular velocity is unusable.
+    #[error("body {body}: {problem}")]
+    Body {
+        /// The body.
+        body: usize,
+        /// What is wrong.
+        problem: String,
+    },
+    /// The constrained-Lagrangian rule cannot hold this molecule rigid.
+    #[error("molecule type {0}: {1}")]
+    NotConstrainable(usize, &'static str),
+    /// A search setting is out of range.
+    #[error("bad search setting: {0}")]
+    Search(SearchError),
+}
+
+/// A rigid molecule type: atoms in the principal frame, mass, moments, bounding radius.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MoleculeType {
+    mass: f64,
+    moments: Moments,
+    principal: DVec3,
+    sites: Vec<DVec3>,
+    species: Vec<u32>,
+    masses: Vec<f64>,
+    radii: Vec<f64>,
+    radius: f64,
+    centre: DVec3,
+    frame: DMat3,
+    bonds: Result<Vec<Bond>, &'static str>,
+}
+
+impl MoleculeType {
+    /// The type of the rigid molecule made of `atoms` (module documentation).
+    ///
+    /// # Errors
+    /// [`SitesError`] for fewer than two atoms, bad masses or positions, coincident atoms, and
+    /// moments `rigid_free` refuses.
+    pub fn new(atoms: &[SiteAtom]) -> Result<Self, SitesError> {
+        if atoms.len() < 2 {
+            return Err(SitesError::TooFewAtoms(atoms.len()));
+        }
+        for (k, a) in atoms.iter().enumerate() {
+            if !(a.mass.is_finite() && a.mass > 0.0) {
+                return Err(SitesError::Mass {
+                    atom: k,
+                    mass: a.mass,
+                });
+            }
+            if !a.position.is_finite() {
+                return Err(SitesError::Position(k));
+            }
+            for (l, b) in atoms[..k].iter().enumerate() {
+                if a.position == b.position {
+                    return Err(SitesError::Coincident(l, k));
+                }
+            }
+        }
+        let mass: f64 = atoms.iter().map(|a| a.mass).sum();
+        let centre = atoms
+            .iter()
+            .fold(DVec3::ZERO, |c, a| c + a.mass * a.position)
+            / mass;
+        // I = Σ m (|d|² 1 − d dᵀ) about the centre of mass.
+        let mut inertia = DMat3::ZERO;
+        for a in atoms {
+            let d = a.position - centre;
+            inertia += DMat3::from_diagonal(DVec3::splat(a.mass * d.length_squared()))
+                - a.mass * outer(d, d);
+        }
+        let (mut moments, mut frame) = symmetric_eigen(inertia);
+        if frame.determinant() < 0.0 {
+            frame.z_axis = -frame.z_axis;
+        }
+        let top = moments.max_element();
+        let linear = moments.x <= MOMENT_SNAP * top;
+        if linear {
+            moments.x = 0.0;
+        }
+        // Equal moments made exactly equal (ascending order: only neighbours can be equal).
+        if (moments.z - moments.x) <= MOMENT_SNAP * top && !linear {
+            moments = DVec3::splat(moments.element_sum() / 3.0);
+        } else {
+            if (moments.y - moments.x) <= MOMENT_SNAP * top && !linear {
+                let m = 0.5 * (moments.x + moments.y);
+                moments.x = m;
+                moments.y = m;
+            }
+            if (moments.z - moments.y) <= MOMENT_SNAP * top {
+                let m = 0.5 * (moments.y + moments.z);
+                moments.y = m;
+                moments.z = m;
+            }
+        }
+        // A planar molecule sits on the triangle inequality, I₃ = I₁ + I₂: round-off must not
+        // push it over.
+        if (moments.z - (moments.x + moments.y)).abs() <= MOMENT_SNAP * top {
+            moments.z = moments.x + moments.y;
+        }
+        let checked = Moments::new(moments.to_array()).map_err(|e| SitesError::Moments {
+            moments: moments.to_array(),
+            problem: e.to_string(),
+        })?;
+        let sites: Vec<DVec3> = atoms
+            .iter()
+            .map(|a| {
+                let d = frame.transpose() * (a.position - centre);
+                // A linear molecule's atoms are on its axis; round-off off it would be a lever
+                // arm for the dropped spin.
+                if linear { DVec3::new(d.x, 0.0, 0.0) } else { d }
+            })
+            .collect();
+        let radii: Vec<f64> = sites.iter().map(|d| d.length()).collect();
+        let radius = radii.iter().copied().fold(0.0, f64::max);
+        let bonds = rigid_framework(&sites, linear);
+        Ok(MoleculeType {
+            mass,
+            moments: checked,
+            principal: moments,
+            species: atoms.iter().map(|a| a.species).collect(),
+            masses: atoms.iter().map(|a| a.mass).collect(),
+            sites,
+            radii,
+            radius,
+            centre,
+            frame,
+            bonds,
+        })
+    }
+
+    /// Total mass.
+    pub fn mass(&self) -> f64 {
+        self.mass
+    }
+
+    /// Principal moments, in increasing order (`I₁ = 0` for a linear molecule).
+    pub fn moments(&self) -> DVec3 {
+        self.principal
+    }
+
+    /// Whether the molecule is linear (no moment about its axis, body axis 1).
+    pub fn is_linear(&self) -> bool {
+        self.principal.x == 0.0
+    }
+
+    /// Atom positions in the principal frame, relative to the centre of mass.
+    pub fn sites(&self) -> &[DVec3] {
+        &self.sites
+    }
+
+    /// Site species of the atoms.
+    pub fn site_species(&self) -> &[u32] {
+        &self.species
+    }
+
+    /// Atom masses.
+    pub fn masses(&self) -> &[f64] {
+        &self.masses
+    }
+
+    /// The largest distance of a site from the centre (the bounding sphere, 000 §III.A).
+    pub fn radius(&self) -> f64 {
+        self.radius
+    }
+
+    /// The centre of mass in the frame the atoms were given in.
+    pub fn centre(&self) -> DVec3 {
+        self.centre
+    }
+
+    /// The principal axes in the frame the atoms were given in (columns, right-handed).
+    pub fn frame(&self) -> DMat3 {
+        self.frame
+    }
+
+    /// The distance constraints that hold the molecule rigid (the constrained-Lagrangian
+    /// rule's), or why there are none.
+    ///
+    /// # Errors
+    /// The molecule is planar or collinear with more than two atoms.
+    pub fn bonds(&self) -> Result<&[Bond], &'static str> {
+        self.bonds.as_deref().map_err(|e| *e)
+    }
+
+    /// Rotational degrees of freedom (2 for a linear molecule, else 3).
+    pub fn rotational_dof(&self) -> f64 {
+        if self.is_linear() { 2.0 } else { 3.0 }
+    }
+
+    /// The body a rule sees at lab orientation `orientation` (body → lab).
+    fn body(&self, orientation: DMat3) -> Result<SiteBody, CollideError> {
+        if self.is_linear() {
+            Ok(SiteBody::Linear(LinearBody::new(
+                self.mass,
+                self.principal.y,
+                orientation.x_axis,
+            )?))
+        } else {
+            Ok(SiteBody::Rigid(RigidBody::from_principal(
+                self.mass,
+                self.principal,
+                DQuat::from_mat3(&orientation),
+            )?))
+        }
+    }
+
+    /// Body-frame angular velocity from lab angular momentum `l` (linear: its part
+    /// perpendicular to the axis).
+    fn omega_from_momentum(&self, orientation: DMat3, l: DVec3) -> DVec3 {
+        let lb = orientation.transpose() * l;
+        if self.is_linear() {
+            DVec3::new(0.0, lb.y / self.principal.y, lb.z / self.principal.z)
+        } else {
+            lb / self.principal
+        }
+    }
+}
+
+/// `a bᵀ`.
+fn outer(a: DVec3, b: DVec3) -> DMat3 {
+    DMat3::from_cols(a * b.x, a * b.y, a * b.z)
+}
+
+/// Eigenvalues (increasing) and eigenvectors (columns) of a symmetric 3×3 matrix by cyclic
+/// Jacobi rotations: converges quadratically to round-off, and a 3×3 needs a handful of sweeps.
+fn symmetric_eigen(m: DMat3) -> (DVec3, DMat3) {
+    let mut a = m.to_cols_array_2d();
+    let mut v = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    for _sweep in 0..64 {
+        let off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
+        let diag = a[0][0] * a[0][0] + a[1][1] * a[1][1] + a[2][2] * a[2][2];
+        if off <= 1e-34 * diag || off == 0.0 {
+            break;
+        }
+        for (p, q) in [(0, 1), (0, 2), (1, 2)] {
+            if a[p][q] == 0.0 {
+                continue;
+            }
+            // The rotation that zeroes a[p][q] (Numerical Recipes' stable form of θ).
+            let theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
+            let t = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
+            let c = 1.0 / (t * t + 1.0).sqrt();
+            let s = t * c;
+            for row in &mut a {
+                let (x, y) = (row[p], row[q]);
+                row[p] = c * x - s * y;
+                row[q] = s * x + c * y;
+            }
+            let (row_p, row_q) = (a[p], a[q]);
+            for (k, (x, y)) in row_p.into_iter().zip(row_q).enumerate() {
+                a[p][k] = c * x - s * y;
+                a[q][k] = s * x + c * y;
+            }
+            for col in &mut v {
+                let (x, y) = (col[p], col[q]);
+                col[p] = c * x - s * y;
+                col[q] = s * x + c * y;
+            }
+        }
+    }
+    // `v[k]` is row k of the eigenvector matrix: column j holds eigenvector j.
+    let mut order = [0usize, 1, 2];
+    order.sort_by(|&x, &y| a[x][x].total_cmp(&a[y][y]));
+    let vec = |j: usize| DVec3::new(v[0][j], v[1][j], v[2][j]);
+    (
+        DVec3::new(
+            a[order[0]][order[0]],
+            a[order[1]][order[1]],
+            a[order[2]][order[2]],
+        ),
+        DMat3::from_cols(vec(order[0]), vec(order[1]), vec(order[2])),
+    )
+}
+
+/// `3n − 6` distance constraints holding the atoms rigid to first order: a tetrahedron of
+/// reference atoms, and every other atom tied to the three reference atoms whose plane it is
+/// farthest from (one bond for a dumbbell).
+fn rigid_framework(sites: &[DVec3], linear: bool) -> Result<Vec<Bond>, &'static str> {
+    let n = sites.len();
+    if n == 2 {
+        return Ok(vec![Bond::new(0, 1)]);
+    }
+    if linear {
+        return Err(
+            "a collinear molecule of more than two atoms has dependent distance constraints: \
+             the constrained rule cannot be used",
+        );
+    }
+    let size = sites.iter().map(|d| d.length()).fold(0.0, f64::max);
+    let far = |from: &dyn Fn(DVec3) -> f64| {
+        (0..n)
+            .max_by(|&a, &b| from(sites[a]).total_cmp(&from(sites[b])))
+            .expect("atoms")
+    };
+    let p0 = 0;
+    let p1 = far(&|d| (d - sites[p0]).length());
+    let axis = (sites[p1] - sites[p0]).normalize();
+    let p2 = far(&|d| (d - sites[p0]).cross(axis).length());
+    let normal = (sites[p1] - sites[p0])
+        .cross(sites[p2] - sites[p0])
+        .normalize();
+    let p3 = far(&|d| (d - sites[p0]).dot(normal).abs());
+    if (sites[p3] - sites[p0]).dot(normal).abs() < 1e-6 * size {
+        return Err(
+            "a planar molecule cannot be held rigid by distance constraints (its atoms can move \
+             out of the plane to first order): the constrained rule cannot be used",
+        );
+    }
+    let refs = [p0, p1, p2, p3];
+    let mut bonds = Vec::with_capacity(3 * n - 6);
+    for a in 0..4 {
+        for b in a + 1..4 {
+            bonds.push(Bond::new(refs[a], refs[b]));
+        }
+    }
+    for k in (0..n).filter(|k| !refs.contains(k)) {
+        let mut best = (0.0, [0, 1, 2]);
+        for face in [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]] {
+            let [a, b, c] = face.map(|f| sites[refs[f]]);
+            let nrm = (b - a).cross(c - a).normalize();
+            let h = (sites[k] - a).dot(nrm).abs();
+            if h > best.0 {
+                best = (h, face);
+            }
+        }
+        for f in best.1 {
+            bonds.push(Bond::new(refs[f], k));
+        }
+    }
+    Ok(bonds)
+}
+
+/// A molecule as an impulse rule sees it (static dispatch over the two kinds).
+#[derive(Clone, Copy, Debug)]
+enum SiteBody {
+    Rigid(RigidBody),
+    Linear(LinearBody),
+}
+
+impl CollideBody for SiteBody {
+    #[inline]
+    fn inv_mass(&self) -> f64 {
+        match self {
+            SiteBody::Rigid(b) => b.inv_mass(),
+            SiteBody::Linear(b) => b.inv_mass(),
+        }
+    }
+
+    #[inline]
+    fn angular_response(&self, torque: DVec3) -> Result<DVec3, CollideError> {
+        match self {
+            SiteBody::Rigid(b) => b.angular_response(torque),
+            SiteBody::Linear(b) => b.angular_response(torque),
+        }
+    }
+}
+
+/// Which impulse rule executes the events.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImpulseRule {
+    /// 000 §IV.B: an impulse at the two sites along the line joining them.
+    ContactPoint,
+    /// 000 §IV.A: impulses on the atoms plus impulsive constraint forces (`Z` matrix).
+    Constrained,
+}
+
+/// How far the two impulse rules landed apart over the events checked
+/// ([`Sites::set_cross_check`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct CrossCheck {
+    /// Events executed by both rules.
+    pub events: u64,
+    /// Largest `|ΔS| / |S|` of the impulse.
+    pub impulse: f64,
+    /// Largest difference of a new centre velocity or site velocity from the rotation
+    /// (`|Δv| + |Δω| ρ`), relative to the largest site speed of the pair before the event.
+    pub velocity: f64,
+    /// Events at which the two rules disagreed on crossing or reflecting.
+    pub outcome_mismatches: u64,
+}
+
+/// One molecule's free motion since its last change at time `t`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Rotation {
+    motion: FreeMotion,
+    t: f64,
+}
+
+impl Rotation {
+    #[inline(always)]
+    fn pose(&self, now: f64) -> (DMat3, DVec3) {
+        let p = self.motion.pose(now - self.t);
+        (p.orientation, p.omega_lab())
+    }
+}
+
+/// What a prediction left for its pair.
+#[derive(Clone, Debug, PartialEq)]
+enum Pending {
+    /// The molecules come within reach at `at`: set up every site pair then.
+    Later,
+    /// Per site pair, in the order of the pair's site-pair table.
+    Sites(Vec<SiteSearch>),
+    /// The pair event is for site pair `k` at `boundary`.
+    Fire(u32, Boundary),
+}
+
+/// One site pair of a pair of molecule types.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct SitePair {
+    a: u16,
+    b: u16,
+    potential: u32,
+    /// `ρ_α + ρ_β`.
+    arms: f64,
+}
+
+/// The site pairs of one ordered pair of molecule types.
+#[derive(Clone, Debug, PartialEq)]
+struct TypePair {
+    pairs: Vec<SitePair>,
+    /// Largest centre distance at which any site pair interacts.
+    reach: f64,
+}
+
+/// Rigid site-based molecules with stepped site–site potentials (module documentation).
+#[derive(Debug)]
+pub struct Sites {
+    types: Vec<MoleculeType>,
+    potentials: Potentials,
+    type_pairs: Vec<TypePair>,
+    body_type: Vec<u32>,
+    rotations: Vec<Rotation>,
+    /// Site-pair levels of molecule pairs `(i, j)`, `i < j`, in `j`-major order of `(α, β)`:
+    /// index `α n_j + β`. Absent: all on level 0.
+    levels: SiteLevels,
+    pending: SavedSearches<Pending>,
+    settings: SearchSettings,
+    rule: ImpulseRule,
+    cross: Option<CrossCheck>,
+    solver: ConstraintSolver,
+    rng: Xoshiro256PlusPlus,
+    stats: SearchStats,
+    reach: f64,
+}
+
+impl Sites {
+    /// Counters of this model's root searches so far.
+    pub fn search_stats(&self) -> SearchStats {
+        self.stats
+    }
+
+    /// Molecules of `types` interacting through the site–site `potentials` (over the site
+    /// species); body `i` is of type `body_type[i]`, with orientation `orientations[i]` (body
+    /// → lab) and lab angular velocity `omegas[i]` at time `t0`; searches with `settings`, the
+    /// jitter drawn from `seed`; events executed by `rule`.
+    ///
+    /// # Errors
+    /// [`SitesError`].
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        types: Vec<MoleculeType>,
+        potentials: Potentials,
+        body_type: &[u32],
+        orientations: &[DQuat],
+        omegas: &[DVec3],
+        t0: f64,
+        settings: SearchSettings,
+        rule: ImpulseRule,
+        seed: u64,
+    ) -> Result<Self, SitesError> {
+        let nt = types.len();
+        let ns = potentials.n_species();
+        for t in &types {
+            if let Some(&s) = t.species.iter().find(|&&s| s as usize >= ns) {
+                return Err(SitesError::SiteSpecies(s, ns));
+            }
+        }
+        if rule == ImpulseRule::Constrained {
+            for (k, t) in types.iter().enumerate() {
+                if let Err(e) = &t.bonds {
+                    return Err(SitesError::NotConstrainable(k, e));
+                }
+            }
+        }
+        let mut type_pairs = Vec::with_capacity(nt * nt);
+        for ti in &types {
+            for tj in &types {
+                let mut pairs = Vec::new();
+                let mut reach: f64 = 0.0;
+                for (a, (&sa, &ra)) in ti.species.iter().zip(&ti.radii).enumerate() {
+                    for (b, (&sb, &rb)) in tj.species.iter().zip(&tj.radii).enumerate() {
+                        let k = potentials.index(sa, sb);
+                        reach = reach.max(potentials.all()[k].reach() + ra + rb);
+                        pairs.push(SitePair {
+                            a: a as u16,
+                            b: b as u16,
+                            potential: k as u32,
+                            arms: ra + rb,
+                        });
+                    }
+                }
+                type_pairs.push(TypePair {
+                    pairs,
+                    reach: reach * (1.0 + 1e-12),
+                });
+            }
+        }
+        let reach = type_pairs.iter().map(|p| p.reach).fold(0.0, f64::max);
+        let mut rotations = Vec::with_capacity(body_type.len());
+        for (i, &ty) in body_type.iter().enumerate() {
+            let Some(t) = types.get(ty as usize) else {
+                return Err(SitesError::Type { body: i, kind: ty });
+            };
+            let (q, w) = (orientations[i], omegas[i]);
+            if !(q.is_finite() && w.is_finite()) || q.length_squared() == 0.0 {
+                return Err(SitesError::Body {
+                    body: i,
+                    problem: "orientation or angular velocity is not finite".into(),
+                });
+            }
+            let q = q.normalize();
+            let wb = DMat3::from_quat(q).transpose() * w;
+            let motion =
+                FreeMotion::from_quat(&t.moments, q, wb).map_err(|e| SitesError::Body {
+                    body: i,
+                    problem: e.to_string(),
+                })?;
+            rotations.push(Rotation { motion, t: t0 });
+        }
+        check_settings(&settings).map_err(SitesError::Search)?;
+        let n = body_type.len();
+        Ok(Sites {
+            types,
+            potentials,
+            type_pairs,
+            body_type: body_type.to_vec(),
+            rotations,
+            levels: SiteLevels::default(),
+            pending: SavedSearches::new(n),
+            settings,
+            rule,
+            cross: None,
+            solver: ConstraintSolver::new(),
+            rng: Xoshiro256PlusPlus::seed_from_u64(seed),
+            stats: SearchStats::default(),
+            reach,
+        })
+    }
+
+    /// Runs both impulse rules at every event from now on, executing with the chosen one, and
+    /// records how far apart they land ([`Sites::cross_check`]).
+    ///
+    /// # Errors
+    /// A molecule type the constrained rule cannot hold rigid.
+    pub fn set_cross_check(&mut self, on: bool) -> Result<(), SitesError> {
+        if on {
+            for (k, t) in self.types.iter().enumerate() {
+                if let Err(e) = &t.bonds {
+                    return Err(SitesError::NotConstrainable(k, e));
+                }
+            }
+            self.cross = Some(self.cross.unwrap_or_default());
+        } else {
+            self.cross = None;
+        }
+        Ok(())
+    }
+
+    /// The cross-check record, if it is on.
+    pub fn cross_check(&self) -> Option<CrossCheck> {
+        self.cross
+    }
+
+    /// The molecule types.
+    pub fn types(&self) -> &[MoleculeType] {
+        &self.types
+    }
+
+    /// The site–site potentials.
+    pub fn potentials(&self) -> &Potentials {
+        &self.potentials
+    }
+
+    /// The search settings.
+    pub fn settings(&self) -> &SearchSettings {
+        &self.settings
+    }
+
+    /// Lab orientation (body → lab) and lab angular velocity of molecule `i` at `now`.
+    pub fn pose(&self, i: u32, now: f64) -> (DMat3, DVec3) {
+        self.rotations[i as usize].pose(now)
+    }
+
+    /// Lab positions of molecule `i`'s sites relative to its centre at `now`.
+    pub fn site_arms(&self, i: u32, now: f64) -> Vec<DVec3> {
+        let (r, _) = self.pose(i, now);
+        self.types[self.body_type[i as usize] as usize]
+            .sites
+            .iter()
+            .map(|&d| r * d)
+            .collect()
+    }
+
+    /// The stored level of site `a` of `i` with site `b` of `j`.
+    pub fn site_level(&self, i: u32, j: u32, a: usize, b: usize) -> u16 {
+        self.levels.get(i, j, a, b, self.sizes(i, j))
+    }
+
+    /// Number of molecule pairs with a site pair off level 0.
+    pub fn stored_pairs(&self) -> usize {
+        self.levels.len()
+    }
+
+    #[inline]
+    fn n_sites(&self, i: u32) -> usize {
+        self.types[self.body_type[i as usize] as usize].sites.len()
+    }
+
+    /// The site counts of `i` and `j`.
+    #[inline]
+    fn sizes(&self, i: u32, j: u32) -> (usize, usize) {
+        (self.n_sites(i), self.n_sites(j))
+    }
+
+    fn set_level(&mut self, i: u32, j: u32, a: usize, b: usize, level: u16) {
+        let sizes = self.sizes(i, j);
+        self.levels.set(i, j, a, b, sizes, level);
+    }
+
+    /// All site-pair levels of `(i, j)` in the order of the type pair's table (`α`-major for
+    /// `i`).
+    fn pair_levels(&self, i: u32, j: u32) -> Vec<u16> {
+        self.levels.pair(i, j, self.sizes(i, j))
+    }
+
+    #[inline]
+    fn type_pair(&self, i: u32, j: u32) -> usize {
+        self.body_type[i as usize] as usize * self.types.len() + self.body_type[j as usize] as usize
+    }
+
+    /// Sets up every site pair's search of `(i, j)` at `now` (brackets, then searches of those
+    /// already within reach), and chooses the pair's next event.
+    #[allow(clippy::too_many_arguments)]
+    fn start_sites(
+        &mut self,
+        i: u32,
+        j: u32,
+        now: f64,
+        dr: DVec3,
+        dv: DVec3,
+    ) -> Option<(f64, Kind)> {
+        let tp = self.type_pair(i, j);
+        let levels = self.pair_levels(i, j);
+        let n = self.type_pairs[tp].pairs.len();
+        let mut sites = Vec::with_capacity(n);
+        for (k, &level) in levels.iter().enumerate().take(n) {
+            let sp = self.type_pairs[tp].pairs[k];
+            let lv = self.potentials.all()[sp.potential as usize].levels()[level as usize];
+            // The band's largest radius: the outer one, or the inner one on level 0.
+            let radius = if lv.outer2 < f64::INFINITY {
+                lv.outer2.sqrt()
+            } else {
+                lv.inner2.sqrt()
+            };
+            let r = (radius + sp.arms) * (1.0 + 1e-12);
+            sites.push(match bracket(dr, dv, r * r) {
+                None => SiteSearch::Done,
+                Some((a, b)) if a.is_nan() || b.is_nan() => {
+                    self.stats.failures += 1;
+                    SiteSearch::Done
+                }
+                Some((a, b)) => SiteSearch::Deferred {
+                    at: now + a,
+                    end: now + b,
+                },
+            });
+        }
+        self.advance(i, j, now, dr, dv, sites, true)
+    }
+
+    /// Runs every site pair whose search is due at `now` up to `now + window`, then picks the
+    /// pair's next event: the earliest root if no stopped or deferred search lies before it,
+    /// else a virtual event at the earliest of those.
+    #[allow(clippy::too_many_arguments)]
+    fn advance(
+        &mut self,
+        i: u32,
+        j: u32,
+        now: f64,
+        dr: DVec3,
+        dv: DVec3,
+        mut sites: Vec<SiteSearch>,
+        fresh: bool,
+    ) -> Option<(f64, Kind)> {
+        let tp = self.type_pair(i, j);
+        let levels = self.pair_levels(i, j);
+        let window = self.settings.window;
+        let until = now + window;
+        let (ri, rj) = (self.rotations[i as usize], self.rotations[j as usize]);
+        let (ti, tj) = (
+            self.body_type[i as usize] as usize,
+            self.body_type[j as usize] as usize,
+        );
+        let mut cache = PoseCache::default();
+        for k in 0..sites.len() {
+            let due = match sites[k] {
+                SiteSearch::Deferred { at, .. } => at <= now,
+                SiteSearch::Suspended(s) => s.time() <= now || !fresh,
+                _ => false,
+            };
+            if !due {
+                continue;
+            }
+            let sp = self.type_pairs[tp].pairs[k];
+            let lv = self.potentials.all()[sp.potential as usize].levels()[levels[k] as usize];
+            let arm_i = self.types[ti].sites[sp.a as usize];
+            let arm_j = self.types[tj].sites[sp.b as usize];
+            let geo = SiteGeometry {
+                ri,
+                rj,
+                arm_i,
+                arm_j,
+                dr,
+                dv,
+                now,
+                band: Band::of(&lv),
+            };
+            sites[k] = self.search_site(&geo, &mut cache, sites[k], until);
+        }
+        let mut root = (f64::INFINITY, 0usize, Boundary::Inner);
+        let mut wait = f64::INFINITY;
+        for (k, s) in sites.iter().enumerate() {
+            match *s {
+                SiteSearch::Root(t, b) if t < root.0 => root = (t, k, b),
+                SiteSearch::Suspended(st) => wait = wait.min(st.time()),
+                SiteSearch::Deferred { at, .. } => wait = wait.min(at),
+                _ => {}
+            }
+        }
+        if root.0 <= wait && root.0 < f64::INFINITY {
+            let dt = root.0 - now;
+            self.pending
+                .set(i, j, now + dt, Pending::Fire(root.1 as u32, root.2));
+            return Some((dt, Kind::Pair(root.2)));
+        }
+        if wait < f64::INFINITY {
+            let dt = (wait - now).max(0.0);
+            self.pending.set(i, j, now + dt, Pending::Sites(sites));
+            return Some((dt, Kind::Virtual));
+        }
+        None
+    }
+
+    /// Starts or continues one site pair's search up to `until`.
+    fn search_site(
+        &mut self,
+        geo: &SiteGeometry,
+        cache: &mut PoseCache,
+        from: SiteSearch,
+        until: f64,
+    ) -> SiteSearch {
+        let band = geo.band;
+        let (t0, end) = match from {
+            SiteSearch::Deferred { at, end } => (at.max(geo.now), end),
+            SiteSearch::Suspended(s) => (s.time(), s.end()),
+            other => return other,
+        };
+        if let SiteSearch::Deferred { .. } = from {
+            // A search that starts with its pair off the stored level has missed an event.
+            let (d2, _) = geo.distance2(cache, t0);
+            let tol = 1e-7 * band.scale;
+            if d2 < band.lo - tol || d2 > band.hi + tol {
+                self.stats.off_terrace += 1;
+            }
+        }
+        let jitter = if self.settings.jitter > 0.0 {
+            1.0 - self.settings.jitter * self.rng.random::<f64>()
+        } else {
+            1.0
+        };
+        let step = self.settings.max_step * jitter;
+        // A bracket without end (no relative motion: only rotation changes d) needs a window.
+        let horizon = if until == f64::INFINITY && end == f64::INFINITY {
+            t0 + 1e4 * self.settings.max_step
+        } else {
+            until
+        };
+        let window = (horizon - t0).max(f64::MIN_POSITIVE);
+        let mut evals = 0u32;
+        let mut indicator = |t: f64| -> (f64, f64) {
+            evals += 1;
+            let (d2, rate) = geo.distance2(cache, t);
+            band.indicator(d2, rate)
+        };
+        let result = match (self.settings.method, from) {
+            (SearchMethod::Adaptive, SiteSearch::Suspended(s)) => {
+                Adaptive::new(step).and_then(|m| m.resume(&mut indicator, s, window))
+            }
+            (SearchMethod::Adaptive, _) => Adaptive::new(step)
+                .and_then(|m| m.start(&mut indicator, t0, end, Crossing::Falling, window)),
+            (SearchMethod::Grid { threshold }, SiteSearch::Suspended(s)) => {
+                Grid::new(step, threshold).and_then(|m| m.resume(&mut indicator, s, window))
+            }
+            (SearchMethod::Grid { threshold }, _) => Grid::new(step, threshold)
+                .and_then(|m| m.start(&mut indicator, t0, end, Crossing::Falling, window)),
+        };
+        self.stats.searches += 1;
+        self.stats.evaluations += u64::from(evals);
+        let report = match result {
+            Ok(r) => r,
+            Err(_) => {
+                self.stats.failures += 1;
+                return SiteSearch::Done;
+            }
+        };
+        let checked_to = match report.outcome {
+            root_search::Outcome::Root(r) => r.t,
+            root_search::Outcome::Suspended(s) => s.time(),
+            root_search::Outcome::NoRoot => end,
+        };
+        if let Some(fine) = self.settings.verify_step {
+            self.stats.verified += 1;
+            let mut reference = |t: f64| -> (f64, f64) {
+                let (d2, rate) = geo.distance2(cache, t);
+                band.indicator(d2, rate)
+            };
+            let found = Grid::new(fine, f64::INFINITY).and_then(|g| {
+                g.start(
+                    &mut reference,
+                    t0,
+                    checked_to.min(t0 + 1e4 * self.settings.max_step),
+                    Crossing::Falling,
+                    f64::INFINITY,
+                )
+            });
+            if let Ok(rep) = found
+                && let Some(tg) = rep.root()
+                && tg < checked_to - 1e-6 * self.settings.max_step
+            {
+                self.stats.verify_misses += 1;
+            }
+        }
+        match report.outcome {
+            root_search::Outcome::Root(r) => {
+                self.stats.roots += 1;
+                let (d2, _) = geo.distance2(cache, r.t);
+                let boundary = if band.hi == f64::INFINITY
+                    || (band.lo > 0.0 && (d2 - band.lo).abs() < (band.hi - d2).abs())
+                {
+                    Boundary::Inner
+                } else {
+                    Boundary::Outer
+                };
+                SiteSearch::Root(r.t, boundary)
+            }
+            root_search::Outcome::Suspended(s) => {
+                self.stats.suspended += 1;
+                SiteSearch::Suspended(s)
+            }
+            root_search::Outcome::NoRoot => SiteSearch::Done,
+        }
+    }
+
+    /// The lab velocities of sites after the rule: the rule's new velocities of both bodies.
+    #[allow(clippy::too_many_arguments)]
+    fn constrained(
+        &mut self,
+        i: u32,
+        j: u32,
+        a: usize,
+        b: usize,
+        dr: DVec3,
+        (oi, oj): (DMat3, DMat3),
+        vel_i: Velocity,
+        vel_j: Velocity,
+        step: f64,
+    ) -> Result<(collide::Impulse, Velocity, Velocity), CollideError> {
+        let ti = &self.types[self.body_type[i as usize] as usize];
+        let tj = &self.types[self.body_type[j as usize] as usize];
+        let arms_i: Vec<DVec3> = ti.sites.iter().map(|&d| oi * d).collect();
+        let arms_j: Vec<DVec3> = tj.sites.iter().map(|&d| oj * d).collect();
+        let pos_i: Vec<DVec3> = arms_i.iter().map(|&d| dr + d).collect();
+        let pos_j = arms_j.clone();
+        let mut vi: Vec<DVec3> = arms_i
+            .iter()
+            .map(|&d| vel_i.linear + vel_i.angular.cross(d))
+            .collect();
+        let mut vj: Vec<DVec3> = arms_j
+            .iter()
+            .map(|&d| vel_j.linear + vel_j.angular.cross(d))
+            .collect();
+        let bonds_i = ti.bonds.as_deref().map_err(|_| {
+            CollideError::NoImpulse("the constrained rule needs a rigid framework of bonds")
+        })?;
+        let bonds_j = tj.bonds.as_deref().map_err(|_| {
+            CollideError::NoImpulse("the constrained rule needs a rigid framework of bonds")
+        })?;
+        let imp = self.solver.between(
+            Molecule {
+                masses: &ti.masses,
+                positions: &pos_i,
+                velocities: &mut vi,
+                bonds: bonds_i,
+            },
+            a,
+            Molecule {
+                masses: &tj.masses,
+                positions: &pos_j,
+                velocities: &mut vj,
+                bonds: bonds_j,
+            },
+            b,
+            step,
+        )?;
+        // Centre velocity and angular momentum of the atoms' new velocities.
+        let rigid = |t: &MoleculeType, o: DMat3, arms: &[DVec3], v: &[DVec3]| -> Velocity {
+            let p = t
+                .masses
+                .iter()
+                .zip(v)
+                .fold(DVec3::ZERO, |s, (&m, &u)| s + m * u);
+            let vc = p / t.mass;
+            let l = t
+                .masses
+                .iter()
+                .zip(arms.iter().zip(v))
+                .fold(DVec3::ZERO, |s, (&m, (&d, &u))| s + m * d.cross(u - vc));
+            Velocity::new(vc, o * t.omega_from_momentum(o, l))
+        };
+        Ok((
+            imp,
+            rigid(ti, oi, &arms_i, &vi),
+            rigid(tj, oj, &arms_j, &vj),
+        ))
+    }
+}
+
+/// Poses of the two molecules at the last few sample times: the site pairs of one molecule
+/// pair share their samples on a grid (and their first sample always).
+#[derive(Default)]
+struct PoseCache {
+    entries: [(f64, DMat3, DVec3, DMat3, DVec3); 8],
+    next: usize,
+    len: usize,
+}
+
+impl PoseCache {
+    #[inline]
+    fn get(&mut self, t: f64, ri: &Rotation, rj: &Rotation) -> (DMat3, DVec3, DMat3, DVec3) {
+        for e in &self.entries[..self.len] {
+            if e.0 == t {
+                return (e.1, e.2, e.3, e.4);
+            }
+        }
+        let (oi, wi) = ri.pose(t);
+        let (oj, wj) = rj.pose(t);
+        self.entries[self.next] = (t, oi, wi, oj, wj);
+        self.next = (self.next + 1) % self.entries.len();
+        self.len = (self.len + 1).min(self.entries.len());
+        (oi, wi, oj, wj)
+    }
+}
+
+/// What one site pair's indicator needs.
+struct SiteGeometry {
+    ri: Rotation,
+    rj: Rotation,
+    arm_i: DVec3,
+    arm_j: DVec3,
+    dr: DVec3,
+    dv: DVec3,
+    now: f64,
+    band: Band,
+}
+
+impl SiteGeometry {
+    /// `d²` of the site pair at `t` and its rate `2 r·u`.
+    #[inline]
+    fn distance2(&self, cache: &mut PoseCache, t: f64) -> (f64, f64) {
+        let (oi, wi, oj, wj) = cache.get(t, &self.ri, &self.rj);
+        let (di, dj) = (oi * self.arm_i, oj * self.arm_j);
+        let r = self.dr + self.dv * (t - self.now) + di - dj;
+        let u = self.dv + wi.cross(di) - wj.cross(dj);
+        (r.length_squared(), 2.0 * r.dot(u))
+    }
+}
+
+impl PairModel for Sites {
+    fn reach(&self) -> f64 {
+        self.reach
+    }
+
+    fn n_species(&self) -> usize {
+        self.types.len()
+    }
+
+    fn mass(&self, s: u32) -> f64 {
+        self.types[s as usize].mass
+    }
+
+    fn setup_pair(
+        &mut self,
+        i: u32,
+        j: u32,
+        _si: u32,
+        _sj: u32,
+        dr: DVec3,
+    ) -> Result<(), PairSetupError> {
+        let t = self.rotations[i as usize].t;
+        let (oi, _) = self.pose(i, t);
+        let (oj, _) = self.pose(j, t);
+        let tp = self.type_pair(i, j);
+        let (ti, tj) = (
+            self.body_type[i as usize] as usize,
+            self.body_type[j as usize] as usize,
+        );
+        for k in 0..self.type_pairs[tp].pairs.len() {
+            let sp = self.type_pairs[tp].pairs[k];
+            let pot = &self.potentials.all()[sp.potential as usize];
+            let d = (dr + oi * self.types[ti].sites[sp.a as usize]
+                - oj * self.types[tj].sites[sp.b as usize])
+                .length();
+            if let Some(core) = pot.core()
+                && d < core
+            {
+                return Err(PairSetupError::Overlap { distance: d, core });
+            }
+            let level = pot.level_at(d);
+            if level > 0 {
+                self.set_level(i, j, sp.a as usize, sp.b as usize, level as u16);
+            }
+        }
+        Ok(())
+    }
+
+    fn predict(
+        &mut self,
+        i: u32,
+        j: u32,
+        _si: u32,
+        _sj: u32,
+        now: f64,
+        dr: DVec3,
+        dv: DVec3,
+    ) -> Option<(f64, Kind)> {
+        let tp = self.type_pair(i, j);
+        let reach = self.type_pairs[tp].reach;
+        let (start, _) = bracket(dr, dv, reach * reach)?;
+        if start.is_nan() {
+            self.stats.failures += 1;
+            return None;
+        }
+        if start > 0.0 {
+            // Not yet within the bounding spheres' reach: set the site pairs up when there.
+            self.stats.deferred += 1;
+            self.pending.set(i, j, now + start, Pending::Later);
+            return Some((start, Kind::Virtual));
+        }
+        self.start_sites(i, j, now, dr, dv)
+    }
+
+    fn resume(
+        &mut self,
+        i: u32,
+        j: u32,
+        _si: u32,
+        _sj: u32,
+        now: f64,
+        dr: DVec3,
+        dv: DVec3,
+    ) -> Option<(f64, Kind)> {
+        match self.pending.take(i, j, now)? {
+            Pending::Later => self.start_sites(i, j, now, dr, dv),
+            Pending::Sites(sites) => self.advance(i, j, now, dr, dv, sites, false),
+            Pending::Fire(..) => None,
+        }
+    }
+
+    fn execute(
+        &mut self,
+        i: u32,
+        j: u32,
+        _si: u32,
+        _sj: u32,
+        now: f64,
+        _boundary: Boundary,
+        dr: DVec3,
+        vi: &mut DVec3,
+        vj: &mut DVec3,
+    ) -> Result<Executed, CollideError> {
+        let skipped = |overlap| Executed {
+            class: PairClass::Skipped,
+            delta_u: 0.0,
+            virial: 0.0,
+            overlap,
+        };
+        let Some(Pending::Fire(k, boundary)) = self.pending.take(i, j, now) else {
+            return Ok(skipped(false));
+        };
+        let tp = self.type_pair(i, j);
+        let sp = self.type_pairs[tp].pairs[k as usize];
+        let (a, b) = (sp.a as usize, sp.b as usize);
+        let (ti, tj) = (
+            self.body_type[i as usize] as usize,
+            self.body_type[j as usize] as usize,
+        );
+        let (oi, wi) = self.pose(i, now);
+        let (oj, wj) = self.pose(j, now);
+        let (di, dj) = (oi * self.types[ti].sites[a], oj * self.types[tj].sites[b]);
+        let n = dr + di - dj;
+        let level = self.site_level(i, j, a, b);
+        let pot = &self.potentials.all()[sp.potential as usize];
+        let lv = pot.levels()[level as usize];
+        let u = (*vi + wi.cross(di)) - (*vj + wj.cross(dj));
+        let rate = n.dot(u);
+        let (radius2, step, right_way) = match boundary {
+            Boundary::Inner => (lv.inner2, lv.dv_in, rate < 0.0),
+            Boundary::Outer => (lv.outer2, lv.dv_out, rate > 0.0),
+        };
+        let d2 = n.length_squared();
+        // The distance must be at the boundary to the root tolerance (1e-10 of the step, in
+        // time) and round-off.
+        let tol = 1e-9 * radius2 + 2.0 * 8.0 * rate.abs() * 1e-10 * self.settings.max_step;
+        if (d2 - radius2).abs() > tol || d2.is_nan() {
+            self.stats.misfits += 1;
+        }
+        let overlap = step == f64::INFINITY && d2 < radius2 * (1.0 - SITE_OVERLAP_TOLERANCE);
+        if !right_way {
+            return Ok(skipped(overlap));
+        }
+        let vel_i = Velocity::new(*vi, wi);
+        let vel_j = Velocity::new(*vj, wj);
+        let contact_rule =
+            |this: &Self| -> Result<(collide::Impulse, Velocity, Velocity), CollideError> {
+                let bi = this.types[ti].body(oi)?;
+                let bj = this.types[tj].body(oj)?;
+                let out = contact(&bi, &bj, vel_i, vel_j, &Contact::new(n, di, dj), step)?;
+                Ok((out.impulse, out.i, out.j))
+            };
+        let (imp, new_i, new_j) = match self.rule {
+            ImpulseRule::ContactPoint => contact_rule(self)?,
+            ImpulseRule::Constrained => {
+                self.constrained(i, j, a, b, dr, (oi, oj), vel_i, vel_j, step)?
+            }
+        };
+        if let Some(mut cc) = self.cross {
+            let other = match self.rule {
+                ImpulseRule::ContactPoint => {
+                    self.constrained(i, j, a, b, dr, (oi, oj), vel_i, vel_j, step)?
+                }
+                ImpulseRule::Constrained => contact_rule(self)?,
+            };
+            let rho = self.types[ti].radius.max(self.types[tj].radius);
+            let speed = [vel_i, vel_j]
+                .iter()
+                .map(|v| v.linear.length() + v.angular.length() * rho)
+                .fold(0.0, f64::max)
+                .max(f64::MIN_POSITIVE);
+            let dev = |x: Velocity, y: Velocity| {
+                (x.linear - y.linear).length() + (x.angular - y.angular).length() * rho
+            };
+            cc.events += 1;
+            cc.impulse = cc
+                .impulse
+                .max((imp.s - other.0.s).abs() / imp.s.abs().max(f64::MIN_POSITIVE));
+            cc.velocity = cc
+                .velocity
+                .max(dev(new_i, other.1).max(dev(new_j, other.2)) / speed);
+            if imp.outcome != other.0.outcome {
+                cc.outcome_mismatches += 1;
+            }
+            self.cross = Some(cc);
+        }
+        *vi = new_i.linear;
+        *vj = new_j.linear;
+        for (m, o, v) in [(i, oi, new_i.angular), (j, oj, new_j.angular)] {
+            let t = &self.types[self.body_type[m as usize] as usize];
+            let q = DQuat::from_mat3(&o).normalize();
+            let wb = DMat3::from_quat(q).transpose() * v;
+            let motion = FreeMotion::from_quat(&t.moments, q, wb)
+                .map_err(|_| CollideError::NotFinite("angular velocity after the impulse"))?;
+            self.rotations[m as usize] = Rotation { motion, t: now };
+        }
+        let class = match (imp.outcome, boundary) {
+            (Outcome::Reflected, _) if step == f64::INFINITY => PairClass::Core,
+            (Outcome::Reflected, _) => PairClass::StepReflect,
+            (Outcome::Crossed, Boundary::Inner) => {
+                self.set_level(i, j, a, b, level + 1);
+                PairClass::StepIn
+            }
+            (Outcome::Crossed, Boundary::Outer) => {
+                self.set_level(i, j, a, b, level - 1);
+                PairClass::StepOut
+            }
+        };
+        Ok(Executed {
+            class,
+            delta_u: imp.delta_v,
+            virial: imp.s * dr.dot(n),
+            overlap,
+        })
+    }
+
+    // Site molecules store a level per *site* pair in their own map, not one level per
+    // molecule pair: the loop's per-pair level is always 0 for them. HMC's ΔH reads the energy
+    // judged from the site distances below; the saved state of checkpoints and of HMC's
+    // rollback cannot carry the site levels yet, so restoring one is refused
+    // (`set_extra_state`) rather than silently losing them.
+    fn level(&self, _i: u32, _j: u32) -> u16 {
+        0
+    }
+
+    fn set_level(&mut self, _i: u32, _j: u32, level: u16) {
+        debug_assert_eq!(level, 0, "site molecules keep their levels per site pair");
+    }
+
+    fn storable_level(&self, _si: u32, _sj: u32, _level: u16) -> bool {
+        false
+    }
+
+    fn configured_level(
+        &self,
+        i: u32,
+        j: u32,
+        _si: u32,
+        _sj: u32,
+        now: f64,
+        dr: DVec3,
+        _stored: u16,
+    ) -> (u16, f64) {
+        let (lo, hi) = (i.min(j), i.max(j));
+        // `dr` is r_i − r_j: orient it from the lower index like the stored levels.
+        let dr = if i == lo { dr } else { -dr };
+        let stored = self.levels.stored(lo, hi);
+        let tp = self.type_pair(lo, hi);
+        let (olo, _) = self.pose(lo, now);
+        let (ohi, _) = self.pose(hi, now);
+        let (tlo, thi) = (
+            self.body_type[lo as usize] as usize,
+            self.body_type[hi as usize] as usize,
+        );
+        let mut e = 0.0;
+        for (k, sp) in self.type_pairs[tp].pairs.iter().enumerate() {
+            let pot = &self.potentials.all()[sp.potential as usize];
+            let d = (dr + olo * self.types[tlo].sites[sp.a as usize]
+                - ohi * self.types[thi].sites[sp.b as usize])
+                .length();
+            let held = stored.map_or(0, |l| l[k] as usize);
+            let level = pot.true_level(held, d);
+            e += pot.levels()[level].energy;
+        }
+        (0, e)
+    }
+
+    fn set_extra_state(&mut self, _state: &[f64]) -> Result<(), String> {
+        Err(
+            "site molecules cannot be restored from a saved state (checkpoints and HMC \
+             rollbacks do not carry their site-pair levels and attitudes yet)"
+                .to_owned(),
+        )
+    }
+
+    fn pair_energy(&self, i: u32, j: u32, _si: u32, _sj: u32) -> f64 {
+        let Some(l) = self.levels.stored(i, j) else {
+            return 0.0;
+        };
+        let (lo, hi) = (i.min(j), i.max(j));
+        let tp = self.type_pair(lo, hi);
+        let mut e = 0.0;
+        for (k, sp) in self.type_pairs[tp].pairs.iter().enumerate() {
+            if l[k] != 0 {
+                e += self.potentials.all()[sp.potential as usize].levels()[l[k] as usize].energy;
+            }
+        }
+        e
+    }
+
+    fn check_pair(
+        &self,
+        i: u32,
+        j: u32,
+        _si: u32,
+        _sj: u32,
+        now: f64,
+        dr: DVec3,
+        listed: bool,
+    ) -> Result<(), String> {
+        let tp = self.type_pair(i, j);
+        let (oi, _) = self.pose(i, now);
+        let (oj, _) = self.pose(j, now);
+        let (ti, tj) = (
+            self.body_type[i as usize] as usize,
+            self.body_type[j as usize] as usize,
+        );
+        for sp in &self.type_pairs[tp].pairs {
+            let pot = &self.potentials.all()[sp.potential as usize];
+            let d = (dr + oi * self.types[ti].sites[sp.a as usize]
+                - oj * self.types[tj].sites[sp.b as usize])
+                .length();
+            let (a, b) = (sp.a as usize, sp.b as usize);
+            if d < pot.reach() && !listed {
+                return Err(format!(
+                    "sites {a} of {i} and {b} of {j} interact at {d} but the pair is not listed"
+                ));
+            }
+            if let Some(core) = pot.core()
+                && d * d < core * core * (1.0 - SITE_OVERLAP_TOLERANCE)
+            {
+                return Err(format!(
+                    "site {a} of {i} and site {b} of {j} overlap: distance {d} < {core}"
+                ));
+            }
+            let stored = self.site_level(i, j, a, b) as usize;
+            let expected = pot.level_at(d);
+            if stored != expected {
+                let n = pot.radii().len();
+                let at = pot.radii()[n - stored.max(expected)];
+                if stored.abs_diff(expected) > 1 || (d - at).abs() > 1e-7 * at {
+                    return Err(format!(
+                        "sites {a} of {i} and {b} of {j} at distance {d} are stored on level \
+                         {stored}, their distance says {expected}"
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    #[inline]
+    fn forget(&mut self, i: u32) {
+        self.pending.clear(i);
+    }
+
+    fn rebase(&mut self, t0: f64) {
+        for (r, &ty) in self.rotations.iter_mut().zip(&self.body_type) {
+            let p = r.motion.pose(t0 - r.t);
+            let q = DQuat::from_mat3(&p.orientation).normalize();
+            match FreeMotion::from_quat(&self.types[ty as usize].moments, q, p.omega) {
+                Ok(motion) => *r = Rotation { motion, t: 0.0 },
+                // Not finite (a broken invariant, reported elsewhere): keep the old anchor.
+                Err(_) => r.t -= t0,
+            }
+        }
+    }
+
+    fn rotational_kinetic(&self) -> f64 {
+        let mut k = crate::engine::sum::Compensated::ZERO;
+        for (r, &ty) in self.rotations.iter().zip(&self.body_type) {
+            let w = r.motion.omega(0.0);
+            k.add(0.5 * (self.types[ty as usize].principal * w * w).element_sum());
+        }
+        k.value()
+    }
+
+    fn rotational_dof(&self) -> f64 {
+        self.body_type
+            .iter()
+            .map(|&t| self.types[t as usize].rotational_dof())
+            .sum()
+    }
+
+    fn thermalize(
+        &mut self,
+        i: u32,
+        s: u32,
+        now: f64,
+        kt: f64,
+        rng: &mut Xoshiro256PlusPlus,
+    ) -> f64 {
+        let t = &self.types[s as usize];
+        let r = self.rotations[i as usize];
+        let p = r.motion.pose(now - r.t);
+        let w = draw_body_omega(t, kt, rng);
+        let q = DQuat::from_mat3(&p.orientation).normalize();
+        let Ok(motion) = FreeMotion::from_quat(&t.moments, q, w) else {
+            return 0.0;
+        };
+        let before = 0.5 * (t.principal * p.omega * p.omega).element_sum();
+        let w0 = motion.omega(0.0);
+        let after = 0.5 * (t.principal * w0 * w0).element_sum();
+        self.rotations[i as usize] = Rotation { motion, t: now };
+        after - before
+    }
+
+    fn spin(&self, i: u32, s: u32) -> DVec3 {
+        let p = self.rotations[i as usize].motion.initial_pose();
+        p.orientation * (self.types[s as usize].principal * p.omega)
+    }
+
+    fn omega(&self, i: u32) -> DVec3 {
+        self.rotations[i as usize].motion.initial_pose().omega_lab()
+    }
+
+    fn axis(&self, i: u32, now: f64) -> Option<DVec3> {
+        Some(self.pose(i, now).0.x_axis)
+    }
+
+    fn report(&self) -> Report {
+        let mut r = Report::default();
+        self.stats.report_into(&mut r);
+        r
+    }
+
+    fn scale_rotations(&mut self, now: f64, factor: f64) {
+        // Each molecule restarts at `now` from its present attitude with its body-frame
+        // angular velocity scaled, as a thermostat collision restarts it with a fresh one.
+        for (r, &ty) in self.rotations.iter_mut().zip(&self.body_type) {
+            let p = r.motion.pose(now - r.t);
+            let q = DQuat::from_mat3(&p.orientation).normalize();
+            if let Ok(motion) =
+                FreeMotion::from_quat(&self.types[ty as usize].moments, q, factor * p.omega)
+            {
+                *r = Rotation { motion, t: now };
+            }
+        }
+    }
+}
+
+/// A body-frame angular velocity drawn from equipartition at `kt`: each principal component
+/// Gaussian with variance `kT / I_k` (none about a linear molecule's axis).
+pub fn draw_body_omega(t: &MoleculeType, kt: f64, rng: &mut Xoshiro256PlusPlus) -> DVec3 {
+    let mut w = DVec3::ZERO;
+    for k in 0..3 {
+        let g: f64 = StandardNormal.sample(rng);
+        if t.principal[k] > 0.0 {
+            w[k] = g * (kt / t.principal[k]).sqrt();
+        }
+    }
+    w
+}
+
+/// Orientations uniform on SO(3) and lab angular velocities from equipartition at `kt` for
+/// bodies of `body_type`, drawn from `seed`.
+pub fn random_orientations(
+    types: &[MoleculeType],
+    body_type: &[u32],
+    kt: f64,
+    seed: u64,
+) -> (Vec<DQuat>, Vec<DVec3>) {
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
+    let mut qs = Vec::with_capacity(body_type.len());
+    let mut ws = Vec::with_capacity(body_type.len());
+    for &ty in body_type {
+        // A normalised 4-D Gaussian is uniform on the unit quaternions.
+        let q = loop {
+            let c: [f64; 4] = std::array::from_fn(|_| StandardNormal.sample(&mut rng));
+            let q = DQuat::from_xyzw(c[0], c[1], c[2], c[3]);
+            if q.length_squared() > 1e-6 {
+                break q.normalize();
+            }
+        };
+        let w = draw_body_omega(&types[ty as usize], kt, &mut rng);
+        qs.push(q);
+        ws.push(DMat3::from_quat(q) * w);
+    }
+    (qs, ws)
+}
+
+/// The shipped molecules (reduced units: lengths in the diameter `σ` of the largest site).
+pub mod molecules {
+    use super::*;
+
+    /// A hard dumbbell: two sites of diameter 1 (site species 0), unit masses, at separation
+    /// `elongation` (`L* = L/σ`), with the hard-core table for [`Potentials::from_tables`].
+    ///
+    /// # Errors
+    /// A non-positive or non-finite elongation.
+    pub fn dumbbell(elongation: f64) -> Result<(MoleculeType, Potentials), SitesError> {
+        let t = MoleculeType::new(&[
+            SiteAtom {
+                position: DVec3::new(0.0, 0.0, -0.5 * elongation),
+                mass: 1.0,
+                species: 0,
+            },
+            SiteAtom {
+                position: DVec3::new(0.0, 0.0, 0.5 * elongation),
+                mass: 1.0,
+                species: 0,
+            },
+        ])?;
+        Ok((
+            t,
+            Potentials::from_tables(1, &[((0, 0), vec![[1.0, f64::INFINITY]])]),
+        ))
+    }
+
+    /// A methane-like molecule: a carbon-like site (species 0, mass 12) at the centre of a
+    /// regular tetrahedron of four hydrogen-like sites (species 1, mass 1) at 0.32 (C–H 1.09 Å
+    /// over σ_C = 3.4 Å). Hard cores with square wells: C–C core 1, well to 1.5, depth 1;
+    /// C–H core 0.75, well to 1.1, depth 0.25; H–H core 0.55, well to 0.8, depth 0.1. A
+    /// spherical rotor with tetrahedral sites (the companion application's methane, in spirit;
+    /// not its parameters).
+    pub fn methane_like() -> (MoleculeType, Potentials) {
+        let s = 0.32 / 3f64.sqrt();
+        let h = |x: f64, y: f64, z: f64| SiteAtom {
+            position: DVec3::new(x, y, z) * s,
+            mass: 1.0,
+            species: 1,
+        };
+        let atoms = [
+            SiteAtom {
+                position: DVec3::ZERO,
+                mass: 12.0,
+                species: 0,
+            },
+            h(1.0, 1.0, 1.0),
+            h(1.0, -1.0, -1.0),
+            h(-1.0, 1.0, -1.0),
+            h(-1.0, -1.0, 1.0),
+        ];
+        (
+            MoleculeType::new(&atoms).expect("a valid molecule"),
+            Potentials::from_tables(
+                2,
+                &[
+                    ((0, 0), vec![[1.0, f64::INFINITY], [1.5, -1.0]]),
+                    ((0, 1), vec![[0.75, f64::INFINITY], [1.1, -0.25]]),
+                    ((1, 1), vec![[0.55, f64::INFINITY], [0.8, -0.1]]),
+                ],
+            ),
+        )
+    }
+
+    /// A benzene-like planar ring: six carbon-like sites (species 0, mass 12) on a hexagon of
+    /// radius 0.41 (1.40 Å over σ_C = 3.4 Å) and six hydrogen-like sites (species 1, mass 1)
+    /// radially outside at 0.73. Hard cores with square wells as [`methane_like`] but C–C core
+    /// 0.95. A symmetric top (planar: `I₃ = I₁ + I₂`).
+    pub fn benzene_like() -> (MoleculeType, Potentials) {
+        let mut atoms = Vec::with_capacity(12);
+        for k in 0..6 {
+            let a = std::f64::consts::FRAC_PI_3 * f64::from(k);
+            let u = DVec3::new(a.cos(), a.sin(), 0.0);
+            atoms.push(SiteAtom {
+                position: 0.41 * u,
+                mass: 12.0,
+                species: 0,
+            });
+            atoms.push(SiteAtom {
+                position: 0.73 * u,
+                mass: 1.0,
+                species: 1,
+            });
+        }
+        (
+            MoleculeType::new(&atoms).expect("a valid molecule"),
+            Potentials::from_tables(
+                2,
+                &[
+                    ((0, 0), vec![[0.95, f64::INFINITY], [1.4, -1.0]]),
+                    ((0, 1), vec![[0.75, f64::INFINITY], [1.1, -0.25]]),
+                    ((1, 1), vec![[0.55, f64::INFINITY], [0.8, -0.1]]),
+                ],
+            ),
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::engine::potential::Level;
+
+    fn atom(x: f64, y: f64, z: f64, mass: f64) -> SiteAtom {
+        SiteAtom {
+            position: DVec3::new(x, y, z),
+            mass,
+            species: 0,
+        }
+    }
+
+    #[test]
+    fn principal_frame_diagonalises_the_inertia_tensor() {
+        // An irregular molecule with unequal masses, given in a rotated, shifted frame.
+        let q = DQuat::from_axis_angle(DVec3::new(1.0, -2.0, 0.5).normalize(), 0.9);
+        let raw = [
+            atom(0.0, 0.0, 0.0, 12.0),
+            atom(1.1, 0.0, 0.0, 1.0),
+            atom(-0.3, 0.9, 0.1, 16.0),
+            atom(0.2, -0.4, 0.8, 2.0),
+        ];
+        let atoms: Vec<SiteAtom> = raw
+            .iter()
+            .map(|a| SiteAtom {
+                position: q * a.position + DVec3::new(3.0, -1.0, 2.0),
+                ..*a
+            })
+            .collect();
+        let t = MoleculeType::new(&atoms).unwrap();
+        assert_eq!(t.mass(), 31.0);
+        // Body-frame sites: centre at the origin, diagonal inertia with the moments ascending.
+        let c = t
+            .sites()
+            .iter()
+            .zip(t.masses())
+            .fold(DVec3::ZERO, |s, (&d, &m)| s + m * d);
+        assert!(c.length() < 1e-13, "{c}");
+        let mut inertia = DMat3::ZERO;
+        for (&d, &m) in t.sites().iter().zip(t.masses()) {
+            inertia += DMat3::from_diagonal(DVec3::splat(m * d.length_squared())) - m * outer(d, d);
+        }
+        let m = t.moments();
+        assert!(m.x < m.y && m.y < m.z);
+        for r in 0..3 {
+            for c in 0..3 {
+                let want = if r == c { m[r] } else { 0.0 };
+                assert!((inertia.col(c)[r] - want).abs() < 1e-12 * m.z, "{inertia}");
+            }
+        }
+        // The frame maps body sites back to the input, and is a proper rotation.
+        assert!((t.frame().determinant() - 1.0).abs() < 1e-14);
+        for (a, &d) in atoms.iter().zip(t.sites()) {
+            assert!((t.frame() * d + t.centre() - a.position).length() < 1e-13);
+        }
+        assert!(t.bonds().unwrap().len() == 6);
+    }
+
+    #[test]
+    fn symmetric_molecules_get_exactly_equal_moments() {
+        // A tetrahedron around a centre atom: a spherical rotor.
+        let s = 1.0 / 3f64.sqrt();
+        let methane = [
+            atom(0.0, 0.0, 0.0, 12.0),
+            atom(s, s, s, 1.0),
+            atom(s, -s, -s, 1.0),
+            atom(-s, s, -s, 1.0),
+            atom(-s, -s, s, 1.0),
+        ];
+        let t = MoleculeType::new(&methane).unwrap();
+        assert_eq!(t.moments.kind(), rigid_free::BodyKind::Spherical);
+        assert!((t.moments().x - 8.0 / 3.0).abs() < 1e-13);
+        assert_eq!(t.bonds().unwrap().len(), 3 * 5 - 6);
+        // A hexagon: a symmetric top (planar: I3 = I1 + I2), refused by the constrained rule.
+        let ring: Vec<SiteAtom> = (0..6)
+            .map(|k| {
+                let a = std::f64::consts::PI / 3.0 * k as f64;
+                atom(1.4 * a.cos(), 1.4 * a.sin(), 0.0, 13.0)
+            })
+            .collect();
+        let t = MoleculeType::new(&ring).unwrap();
+        assert_eq!(
+            t.moments.kind(),
+            rigid_free::BodyKind::Symmetric { axis: 2 }
+        );
+        assert!((t.moments().z - 2.0 * t.moments().x).abs() < 1e-12 * t.moments().z);
+        assert!(t.bonds().unwrap_err().contains("planar"));
+        // A dumbbell: linear, its sites on body axis 1.
+        let d = MoleculeType::new(&[atom(0.0, 0.0, 0.0, 1.0), atom(0.3, 0.4, 0.0, 1.0)]).unwrap();
+        assert!(d.is_linear());
+        assert_eq!(d.moments.kind(), rigid_free::BodyKind::Linear { axis: 0 });
+        assert!((d.sites()[0].x.abs() - 0.25).abs() < 1e-15 && d.sites()[0].y == 0.0);
+        assert!((d.moments().y - 2.0 * 0.25 * 0.25).abs() < 1e-15);
+        assert_eq!(d.bonds().unwrap(), &[Bond::new(0, 1)]);
+    }
+
+    #[test]
+    fn shipped_molecules_have_their_symmetry() {
+        let (m, _) = molecules::methane_like();
+        assert_eq!(m.moments.kind(), rigid_free::BodyKind::Spherical);
+        assert!(m.bonds().is_ok());
+        let (b, _) = molecules::benzene_like();
+        assert_eq!(
+            b.moments.kind(),
+            rigid_free::BodyKind::Symmetric { axis: 2 }
+        );
+        assert!(b.bonds().is_err());
+        let (d, p) = molecules::dumbbell(0.6).unwrap();
+        assert!(d.is_linear() && (d.radius() - 0.3).abs() < 1e-15);
+        assert_eq!(p.get(0, 0).core(), Some(1.0));
+        assert!(molecules::dumbbell(0.0).is_err());
+    }
+
+    #[test]
+    fn bad_molecules_are_refused_with_their_reason() {
+        assert_eq!(
+            MoleculeType::new(&[atom(0.0, 0.0, 0.0, 1.0)]),
+            Err(SitesError::TooFewAtoms(1))
+        );
+        assert!(matches!(
+            MoleculeType::new(&[atom(0.0, 0.0, 0.0, 1.0), atom(1.0, 0.0, 0.0, -1.0)]),
+            Err(SitesError::Mass { atom: 1, .. })
+        ));
+        assert_eq!(
+            MoleculeType::new(&[atom(0.0, 0.0, 0.0, 1.0), atom(0.0, 0.0, 0.0, 1.0)]),
+            Err(SitesError::Coincident(0, 1))
+        );
+        assert_eq!(
+            MoleculeType::new(&[atom(f64::NAN, 0.0, 0.0, 1.0), atom(0.0, 0.0, 0.0, 1.0)]),
+            Err(SitesError::Position(0))
+        );
+        // Three collinear atoms: linear, but no independent framework of constraints.
+        let t = MoleculeType::new(&[
+            atom(-1.0, 0.0, 0.0, 1.0),
+            atom(0.0, 0.0, 0.0, 1.0),
+            atom(1.0, 0.0, 0.0, 1.0),
+        ])
+        .unwrap();
+        assert!(t.is_linear() && t.bonds().is_err());
+    }
+
+    #[test]
+    fn extreme_mass_ratio_keeps_an_exact_frame() {
+        // A heavy atom with a feather-light one far off: the moments span many decades.
+        let t = MoleculeType::new(&[
+            atom(0.0, 0.0, 0.0, 1e6),
+            atom(1.0, 0.0, 0.0, 1e-3),
+            atom(0.0, 1.0, 0.0, 1.0),
+        ])
+        .unwrap();
+        let m = t.moments();
+        assert!(m.x > 0.0 && m.x < m.y && m.y <= m.z);
+        let lab = t.frame() * DMat3::from_diagonal(m) * t.frame().transpose();
+        // Reconstructed tensor from the atoms (input frame, about the centre).
+        let mut inertia = DMat3::ZERO;
+        for (&d, &ms) in t.sites().iter().zip(t.masses()) {
+            let d = t.frame() * d;
+            inertia +=
+                DMat3::from_diagonal(DVec3::splat(ms * d.length_squared())) - ms * outer(d, d);
+        }
+        assert!(
+            (lab - inertia)
+                .abs()
+                .to_cols_array()
+                .iter()
+                .all(|&x| x < 1e-12 * m.z)
+        );
+    }
+
+    #[test]
+    fn band_indicator_watches_both_radii() {
+        let b = Band::of(&Level {
+            inner2: 1.0,
+            outer2: 2.25,
+            dv_in: f64::INFINITY,
+            dv_out: 1.0,
+            energy: -1.0,
+        });
+        assert!(b.indicator(1.5, 0.0).0 > 0.0);
+        assert_eq!(b.indicator(1.0, -2.0), (0.0, -2.0));
+        assert_eq!(b.indicator(2.25, 2.0), (0.0, -2.0));
+        let b0 = Band::of(&Level {
+            inner2: 2.25,
+            outer2: f64::INFINITY,
+            dv_in: -1.0,
+            dv_out: f64::NAN,
+            energy: 0.0,
+        });
+        assert_eq!(b0.indicator(3.0, -1.0), (0.75, -1.0));
+    }
+}
+#[cfg(test)]
+mod pair_tests {
+    use super::*;
+
+    fn atom(x: f64, y: f64, z: f64, mass: f64) -> SiteAtom {
+        SiteAtom {
+            position: DVec3::new(x, y, z),
+            mass,
+            species: 0,
+        }
+    }
+
+    /// Two dumbbells approaching, one tilted and spinning or not: the predicted event (after
+    /// the virtual event at the bounding spheres' contact) is the first time two sites touch.
+    #[test]
+    fn two_dumbbells_meet_at_site_contact() {
+        let t = MoleculeType::new(&[atom(0.0, 0.0, -0.3, 1.0), atom(0.0, 0.0, 0.3, 1.0)]).unwrap();
+        let pot = Potentials::from_tables(1, &[((0, 0), vec![[1.0, f64::INFINITY]])]);
+        for w in [DVec3::ZERO, DVec3::new(0.0, 2.0, 0.0)] {
+            let mut m = Sites::new(
+                vec![t.clone()],
+                pot.clone(),
+                &[0, 0],
+                &[DQuat::IDENTITY, DQuat::from_rotation_y(0.3)],
+                &[DVec3::ZERO, w],
+                0.0,
+                SearchSettings::paper(0.02),
+                ImpulseRule::ContactPoint,
+                1,
+            )
+            .unwrap();
+            let dr = DVec3::new(3.0, 0.0, 0.0);
+            let dv = DVec3::new(-1.0, 0.0, 0.0);
+            let mut now = 0.0;
+            let mut out = m.predict(0, 1, 0, 0, now, dr, dv);
+            let mut virtuals = 0;
+            while let Some((dt, Kind::Virtual)) = out {
+                now += dt;
+                virtuals += 1;
+                out = m.resume(0, 1, 0, 0, now, dr + dv * now, dv);
+                assert!(virtuals < 100);
+            }
+            // The bounding spheres (reach 1 + 0.3 + 0.3) meet at t = 1.4: nothing before.
+            assert!(now >= 1.4 - 1e-9 && virtuals >= 1, "{now}");
+            let (dt, kind) = out.unwrap();
+            assert_eq!(kind, Kind::Pair(Boundary::Inner));
+            let t = now + dt;
+            let c = dr + dv * t;
+            let (a0, a1) = (m.site_arms(0, t), m.site_arms(1, t));
+            let dmin = a0
+                .iter()
+                .flat_map(|a| a1.iter().map(move |b| (c + *a - *b).length()))
+                .fold(f64::INFINITY, f64::min);
+            assert!((dmin - 1.0).abs() < 1e-9, "{w}: closest sites {dmin}");
+            // And no site pair was closer than contact before (sampled).
+            for q in 0..200 {
+                let s = t * f64::from(q) / 200.0;
+                let c = dr + dv * s;
+                let (a0, a1) = (m.site_arms(0, s), m.site_arms(1, s));
+                for a in &a0 {
+                    for b in &a1 {
+                        assert!((c + *a - *b).length() > 1.0 - 1e-9);
+                    }
+                }
+            }
+        }
+    }
+
+    /// The exact free motion of an asymmetric molecule keeps its lab angular momentum.
+    #[test]
+    fn free_flight_conserves_lab_angular_momentum() {
+        let t = MoleculeType::new(&[
+            atom(0.0, 0.0, 0.0, 3.0),
+            atom(0.6, 0.2, 0.0, 1.0),
+            atom(-0.3, 0.5, 0.25, 2.0),
+        ])
+        .unwrap();
+        let pot = Potentials::from_tables(1, &[((0, 0), vec![[1.0, f64::INFINITY]])]);
+        let m = Sites::new(
+            vec![t.clone()],
+            pot,
+            &[0],
+            &[DQuat::from_rotation_y(0.3)],
+            &[DVec3::new(0.3, -1.0, 2.0)],
+            0.0,
+            SearchSettings::paper(0.02),
+            ImpulseRule::ContactPoint,
+            1,
+        )
+        .unwrap();
+        assert_eq!(
+            m.rotations[0].motion.kind(),
+            rigid_free::MotionKind::Asymmetric
+        );
+        let l = |time: f64| {
+            let (o, w) = m.pose(0, time);
+            o * (t.moments() * (o.transpose() * w))
+        };
+        for time in [0.1, 1.0, 3.0, 30.0] {
+            assert!((l(time) - l(0.0)).length() < 1e-12, "{time}");
+        }
+    }
+}
