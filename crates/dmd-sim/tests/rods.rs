@@ -2,7 +2,7 @@
 //! virtual events, extreme starts.
 
 use collide::Particle;
-use dmd_sim::model::{PairModel, Stepped};
+use dmd_sim::model::{Pair, PairModel, Stepped};
 use dmd_sim::potential::Potentials;
 use dmd_sim::search::SearchSettings;
 use dmd_sim::simulation::{LoopSettings, NoSampler, Simulation, Stop};
@@ -520,13 +520,38 @@ fn hmc_hooks_of_the_rods() {
     // The configured terrace: level 0 and no energy far apart; on the stored terrace while U is
     // on it; the terrace of U after a (missed) change; +∞ inside the core.
     let far = DVec3::new(0.0, 0.0, 5.0);
-    assert_eq!(model.configured_level(0, 1, 0, 0, 0.0, far, 0), (0, 0.0));
+    assert_eq!(
+        model.configured_level(
+            &Pair {
+                i: 0,
+                j: 1,
+                si: 0,
+                sj: 0,
+                now: 0.0,
+                dr: far,
+                dv: DVec3::ZERO
+            },
+            0
+        ),
+        (0, 0.0)
+    );
     let mut seen_well = false;
     let mut seen_core = false;
     for k in 0..400 {
         let dr = DVec3::new(0.0, 0.3 + 0.004 * f64::from(k), 0.0);
         let u = model.energy(0, 1, 0, 0, 0.0, dr);
-        let (level, e) = model.configured_level(0, 1, 0, 0, 0.0, dr, 0);
+        let (level, e) = model.configured_level(
+            &Pair {
+                i: 0,
+                j: 1,
+                si: 0,
+                sj: 0,
+                now: 0.0,
+                dr,
+                dv: DVec3::ZERO,
+            },
+            0,
+        );
         if e == f64::INFINITY {
             seen_core = true;
             assert!(model.storable_level(0, 0, level), "contact level {level}");
@@ -542,7 +567,18 @@ fn hmc_hooks_of_the_rods() {
             assert!(model.storable_level(0, 0, level));
             // Stored on it: it stands.
             assert_eq!(
-                model.configured_level(0, 1, 0, 0, 0.0, dr, level),
+                model.configured_level(
+                    &Pair {
+                        i: 0,
+                        j: 1,
+                        si: 0,
+                        sj: 0,
+                        now: 0.0,
+                        dr,
+                        dv: DVec3::ZERO
+                    },
+                    level
+                ),
                 (level, e)
             );
         }

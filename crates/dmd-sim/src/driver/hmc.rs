@@ -45,7 +45,7 @@ use glam::DVec3;
 
 pub use crate::analysis::block::{BlockEstimate, block_average};
 use crate::engine::event::{Boundary, Kind};
-use crate::engine::model::{Executed, PairModel, PairSetupError};
+use crate::engine::model::{Executed, Pair, PairModel, PairSetupError};
 use crate::engine::schedule::Scheduler;
 use crate::engine::simulation::{NoSampler, SimError, Simulation, Stop};
 
@@ -573,63 +573,33 @@ impl<M: PairModel> PairModel for Faulty<M> {
         self.inner.mass(s)
     }
 
-    fn setup_pair(
-        &mut self,
-        i: u32,
-        j: u32,
-        si: u32,
-        sj: u32,
-        dr: DVec3,
-    ) -> Result<(), PairSetupError> {
-        self.inner.setup_pair(i, j, si, sj, dr)
+    fn setup_pair(&mut self, pair: &Pair) -> Result<(), PairSetupError> {
+        self.inner.setup_pair(pair)
     }
 
     #[inline]
-    fn predict(
-        &mut self,
-        i: u32,
-        j: u32,
-        si: u32,
-        sj: u32,
-        now: f64,
-        dr: DVec3,
-        dv: DVec3,
-    ) -> Option<(f64, Kind)> {
-        if self.blind(i, j) {
+    fn predict(&mut self, pair: &Pair) -> Option<(f64, Kind)> {
+        if self.blind(pair.i, pair.j) {
             return None;
         }
-        self.inner.predict(i, j, si, sj, now, dr, dv)
+        self.inner.predict(pair)
     }
 
-    fn resume(
-        &mut self,
-        i: u32,
-        j: u32,
-        si: u32,
-        sj: u32,
-        now: f64,
-        dr: DVec3,
-        dv: DVec3,
-    ) -> Option<(f64, Kind)> {
-        if self.blind(i, j) {
+    fn resume(&mut self, pair: &Pair) -> Option<(f64, Kind)> {
+        if self.blind(pair.i, pair.j) {
             return None;
         }
-        self.inner.resume(i, j, si, sj, now, dr, dv)
+        self.inner.resume(pair)
     }
 
     fn execute(
         &mut self,
-        i: u32,
-        j: u32,
-        si: u32,
-        sj: u32,
-        now: f64,
+        pair: &Pair,
         boundary: Boundary,
-        dr: DVec3,
         vi: &mut DVec3,
         vj: &mut DVec3,
     ) -> Result<Executed, collide::CollideError> {
-        self.inner.execute(i, j, si, sj, now, boundary, dr, vi, vj)
+        self.inner.execute(pair, boundary, vi, vj)
     }
 
     fn take_kinetic_error(&mut self) -> f64 {
@@ -640,17 +610,8 @@ impl<M: PairModel> PairModel for Faulty<M> {
         self.inner.pair_energy(i, j, si, sj)
     }
 
-    fn check_pair(
-        &self,
-        i: u32,
-        j: u32,
-        si: u32,
-        sj: u32,
-        now: f64,
-        dr: DVec3,
-        listed: bool,
-    ) -> Result<(), String> {
-        self.inner.check_pair(i, j, si, sj, now, dr, listed)
+    fn check_pair(&self, pair: &Pair, listed: bool) -> Result<(), String> {
+        self.inner.check_pair(pair, listed)
     }
 
     fn forget(&mut self, i: u32) {
@@ -677,17 +638,8 @@ impl<M: PairModel> PairModel for Faulty<M> {
         self.inner.storable_level(si, sj, level)
     }
 
-    fn configured_level(
-        &self,
-        i: u32,
-        j: u32,
-        si: u32,
-        sj: u32,
-        now: f64,
-        dr: DVec3,
-        stored: u16,
-    ) -> (u16, f64) {
-        self.inner.configured_level(i, j, si, sj, now, dr, stored)
+    fn configured_level(&self, pair: &Pair, stored: u16) -> (u16, f64) {
+        self.inner.configured_level(pair, stored)
     }
 
     fn rotational_kinetic(&self) -> f64 {

@@ -75,6 +75,27 @@ pub enum PairSetupError {
     },
 }
 
+/// One pair as the loop hands it to a model at time `now`: the bodies `i`, `j`, their species
+/// `si`, `sj`, their separation `dr = r_i − r_j` at the minimum image and relative velocity
+/// `dv = v_i − v_j` (both at `now`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pair {
+    /// The first body.
+    pub i: u32,
+    /// The second body.
+    pub j: u32,
+    /// Species of `i`.
+    pub si: u32,
+    /// Species of `j`.
+    pub sj: u32,
+    /// The loop's time.
+    pub now: f64,
+    /// `r_i − r_j` at `now`, minimum image.
+    pub dr: DVec3,
+    /// `v_i − v_j`.
+    pub dv: DVec3,
+}
+
 /// An interaction model for the event loop.
 ///
 /// The loop knows bodies only by their translational record ([`Body`](crate::engine::body::Body));
@@ -97,43 +118,16 @@ pub trait PairModel {
     ///
     /// # Errors
     /// The pair overlaps a hard core.
-    fn setup_pair(
-        &mut self,
-        i: u32,
-        j: u32,
-        si: u32,
-        sj: u32,
-        dr: DVec3,
-    ) -> Result<(), PairSetupError>;
+    fn setup_pair(&mut self, pair: &Pair) -> Result<(), PairSetupError>;
 
     /// The next event of pair `(i, j)`, of species `(si, sj)`, whose relative position and
     /// velocity are `dr = r_i − r_j` and `dv = v_i − v_j` at time `now`: the time from now and
     /// its kind ([`Kind::Pair`] or, for models with root searches, [`Kind::Virtual`]).
-    #[allow(clippy::too_many_arguments)]
-    fn predict(
-        &mut self,
-        i: u32,
-        j: u32,
-        si: u32,
-        sj: u32,
-        now: f64,
-        dr: DVec3,
-        dv: DVec3,
-    ) -> Option<(f64, Kind)>;
+    fn predict(&mut self, pair: &Pair) -> Option<(f64, Kind)>;
 
     /// A virtual event of owner `i` with partner `j` has come due (both unchanged since it was
     /// scheduled): continue the pair's search. Models without virtual events never get one.
-    #[allow(clippy::too_many_arguments)]
-    fn resume(
-        &mut self,
-        _i: u32,
-        _j: u32,
-        _si: u32,
-        _sj: u32,
-        _now: f64,
-        _dr: DVec3,
-        _dv: DVec3,
-    ) -> Option<(f64, Kind)> {
+    fn resume(&mut self, _pair: &Pair) -> Option<(f64, Kind)> {
         None
     }
 
@@ -143,16 +137,10 @@ pub trait PairModel {
     ///
     /// # Errors
     /// The impulse rule's error for a non-finite state (a broken invariant upstream).
-    #[allow(clippy::too_many_arguments)]
     fn execute(
         &mut self,
-        i: u32,
-        j: u32,
-        si: u32,
-        sj: u32,
-        now: f64,
+        pair: &Pair,
         boundary: Boundary,
-        dr: DVec3,
         vi: &mut DVec3,
         vj: &mut DVec3,
     ) -> Result<Executed, collide::CollideError>;
@@ -167,17 +155,7 @@ pub trait PairModel {
     ///
     /// # Errors
     /// A description of the violation.
-    #[allow(clippy::too_many_arguments)]
-    fn check_pair(
-        &self,
-        i: u32,
-        j: u32,
-        si: u32,
-        sj: u32,
-        now: f64,
-        dr: DVec3,
-        listed: bool,
-    ) -> Result<(), String>;
+    fn check_pair(&self, pair: &Pair, listed: bool) -> Result<(), String>;
 
     /// Body `i`'s event list was cleared: predictions saved for it may go.
     #[inline(always)]
@@ -216,17 +194,7 @@ pub trait PairModel {
     /// one just outside the core (where HMC's repair puts such a pair, at contact). The `U`
     /// of HMC's `ΔH`. Spheres read the radial step potential of the species pair; the rigid
     /// model evaluates its terrace from the attitudes at `now`.
-    #[allow(clippy::too_many_arguments)]
-    fn configured_level(
-        &self,
-        i: u32,
-        j: u32,
-        si: u32,
-        sj: u32,
-        now: f64,
-        dr: DVec3,
-        stored: u16,
-    ) -> (u16, f64);
+    fn configured_level(&self, pair: &Pair, stored: u16) -> (u16, f64);
 
     /// Rotational kinetic energy of all bodies (0 for spheres; part of the HMC Hamiltonian).
     #[inline(always)]
@@ -445,28 +413,14 @@ impl PairModel for HardSpheres {
         self.particles[s as usize].mass()
     }
 
-    fn setup_pair(
-        &mut self,
-        _i: u32,
-        _j: u32,
-        si: u32,
-        sj: u32,
-        dr: DVec3,
-    ) -> Result<(), PairSetupError> {
+    fn setup_pair(&mut self, pair: &Pair) -> Result<(), PairSetupError> {
+        let Pair { si, sj, dr, .. } = *pair;
         setup_stepped(self.potentials.get(si, sj), dr).map(|_| ())
     }
 
     #[inline(always)]
-    fn predict(
-        &mut self,
-        _i: u32,
-        _j: u32,
-        si: u32,
-        sj: u32,
-        _now: f64,
-        dr: DVec3,
-        dv: DVec3,
-    ) -> Option<(f64, Kind)> {
+    fn predict(&mut self, pair: &Pair) -> Option<(f64, Kind)> {
+        let Pair { si, sj, dr, dv, .. } = *pair;
         let b = dr.dot(dv);
         if b >= 0.0 {
             return None;
@@ -479,16 +433,12 @@ impl PairModel for HardSpheres {
     #[inline(always)]
     fn execute(
         &mut self,
-        _i: u32,
-        _j: u32,
-        si: u32,
-        sj: u32,
-        _now: f64,
+        pair: &Pair,
         boundary: Boundary,
-        dr: DVec3,
         vi: &mut DVec3,
         vj: &mut DVec3,
     ) -> Result<Executed, collide::CollideError> {
+        let Pair { si, sj, dr, .. } = *pair;
         debug_assert_eq!(boundary, Boundary::Inner);
         let r2 = dr.length_squared();
         let sigma2 = self.sigma2[si as usize * self.n_species + sj as usize];
@@ -523,16 +473,10 @@ impl PairModel for HardSpheres {
         0.0
     }
 
-    fn check_pair(
-        &self,
-        i: u32,
-        j: u32,
-        si: u32,
-        sj: u32,
-        _now: f64,
-        dr: DVec3,
-        listed: bool,
-    ) -> Result<(), String> {
+    fn check_pair(&self, pair: &Pair, listed: bool) -> Result<(), String> {
+        let Pair {
+            i, j, si, sj, dr, ..
+        } = *pair;
         check_stepped(self.potentials.get(si, sj), i, j, 0, dr.length(), listed)
     }
 
@@ -549,16 +493,8 @@ impl PairModel for HardSpheres {
         false
     }
 
-    fn configured_level(
-        &self,
-        _i: u32,
-        _j: u32,
-        si: u32,
-        sj: u32,
-        _now: f64,
-        dr: DVec3,
-        stored: u16,
-    ) -> (u16, f64) {
+    fn configured_level(&self, pair: &Pair, stored: u16) -> (u16, f64) {
+        let Pair { si, sj, dr, .. } = *pair;
         configured_step(self.potentials.get(si, sj), stored, dr)
     }
 }
@@ -646,14 +582,10 @@ impl PairModel for Stepped {
         self.particles[s as usize].mass()
     }
 
-    fn setup_pair(
-        &mut self,
-        i: u32,
-        j: u32,
-        si: u32,
-        sj: u32,
-        dr: DVec3,
-    ) -> Result<(), PairSetupError> {
+    fn setup_pair(&mut self, pair: &Pair) -> Result<(), PairSetupError> {
+        let Pair {
+            i, j, si, sj, dr, ..
+        } = *pair;
         let level = setup_stepped(self.potentials.get(si, sj), dr)?;
         if level > 0 {
             self.states.set(i, j, level as u16);
@@ -662,16 +594,16 @@ impl PairModel for Stepped {
     }
 
     #[inline(always)]
-    fn predict(
-        &mut self,
-        i: u32,
-        j: u32,
-        si: u32,
-        sj: u32,
-        _now: f64,
-        dr: DVec3,
-        dv: DVec3,
-    ) -> Option<(f64, Kind)> {
+    fn predict(&mut self, pair: &Pair) -> Option<(f64, Kind)> {
+        let Pair {
+            i,
+            j,
+            si,
+            sj,
+            dr,
+            dv,
+            ..
+        } = *pair;
         let levels = self.potentials.get(si, sj).levels();
         let r2 = dr.length_squared();
         let b = dr.dot(dv);
@@ -690,16 +622,14 @@ impl PairModel for Stepped {
 
     fn execute(
         &mut self,
-        i: u32,
-        j: u32,
-        si: u32,
-        sj: u32,
-        _now: f64,
+        pair: &Pair,
         boundary: Boundary,
-        dr: DVec3,
         vi: &mut DVec3,
         vj: &mut DVec3,
     ) -> Result<Executed, collide::CollideError> {
+        let Pair {
+            i, j, si, sj, dr, ..
+        } = *pair;
         let level = self.states.get(i, j);
         let l = self.potentials.get(si, sj).levels()[level as usize];
         let r2 = dr.length_squared();
@@ -756,16 +686,10 @@ impl PairModel for Stepped {
         self.potentials.get(si, sj).levels()[level as usize].energy
     }
 
-    fn check_pair(
-        &self,
-        i: u32,
-        j: u32,
-        si: u32,
-        sj: u32,
-        _now: f64,
-        dr: DVec3,
-        listed: bool,
-    ) -> Result<(), String> {
+    fn check_pair(&self, pair: &Pair, listed: bool) -> Result<(), String> {
+        let Pair {
+            i, j, si, sj, dr, ..
+        } = *pair;
         let stored = self.states.get(i, j) as usize;
         check_stepped(
             self.potentials.get(si, sj),
@@ -795,16 +719,8 @@ impl PairModel for Stepped {
         storable_step(self.potentials.get(si, sj), level)
     }
 
-    fn configured_level(
-        &self,
-        _i: u32,
-        _j: u32,
-        si: u32,
-        sj: u32,
-        _now: f64,
-        dr: DVec3,
-        stored: u16,
-    ) -> (u16, f64) {
+    fn configured_level(&self, pair: &Pair, stored: u16) -> (u16, f64) {
+        let Pair { si, sj, dr, .. } = *pair;
         configured_step(self.potentials.get(si, sj), stored, dr)
     }
 }

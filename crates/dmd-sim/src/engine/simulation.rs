@@ -35,7 +35,7 @@ use rand_xoshiro::Xoshiro256PlusPlus;
 use crate::engine::body::Body;
 use crate::engine::cell::CellGrid;
 use crate::engine::event::{Boundary, Event, EventLists, Kind, SystemEvent};
-use crate::engine::model::{Executed, PairClass, PairModel, PairSetupError};
+use crate::engine::model::{Executed, Pair, PairClass, PairModel, PairSetupError};
 use crate::engine::neighbour::{self, NeighbourLists};
 use crate::engine::schedule::Scheduler;
 use crate::engine::sum::Compensated;
@@ -463,7 +463,15 @@ where
                     lists[i as usize].push(neighbour::entry(j, code));
                     lists[j as usize].push(neighbour::entry(i, neighbour::opposite(code)));
                     let dr = bi.r - (bj.r + shift);
-                    match model.setup_pair(i, j, bi.species, bj.species, dr) {
+                    match model.setup_pair(&Pair {
+                        i,
+                        j,
+                        si: bi.species,
+                        sj: bj.species,
+                        now: 0.0,
+                        dr,
+                        dv: bi.v - bj.v,
+                    }) {
                         Ok(()) => {}
                         Err(PairSetupError::Overlap { distance, core }) => {
                             found = Err(SetupError::Overlap {
@@ -696,7 +704,18 @@ where
         let ex: Executed = self
             .model
             .execute(
-                i, j, bi.species, bj.species, now, boundary, dr, &mut vi, &mut vj,
+                &Pair {
+                    i,
+                    j,
+                    si: bi.species,
+                    sj: bj.species,
+                    now,
+                    dr,
+                    dv: vi - vj,
+                },
+                boundary,
+                &mut vi,
+                &mut vj,
             )
             .map_err(|source| SimError::Collide {
                 i,
@@ -757,7 +776,15 @@ where
         let dr = self.min_image(bi.position_at(now) - bj.position_at(now));
         let dv = bi.v - bj.v;
         let (si, sj, gj) = (bi.species, bj.species, bj.generation);
-        if let Some((dt, kind)) = self.model.resume(i, j, si, sj, now, dr, dv) {
+        if let Some((dt, kind)) = self.model.resume(&Pair {
+            i,
+            j,
+            si,
+            sj,
+            now,
+            dr,
+            dv,
+        }) {
             self.lists
                 .push(i, Event::with_partner(now + dt, j, gj, kind));
         }
@@ -855,7 +882,15 @@ where
         let dr = bi.position_at(now) - (bj.position_at(now) + self.shifts[code as usize]);
         let dv = bi.v - bj.v;
         let (si, sj, gj) = (bi.species, bj.species, bj.generation);
-        if let Some((dt, kind)) = self.model.predict(i, j, si, sj, now, dr, dv) {
+        if let Some((dt, kind)) = self.model.predict(&Pair {
+            i,
+            j,
+            si,
+            sj,
+            now,
+            dr,
+            dv,
+        }) {
             self.lists
                 .push(i, Event::with_partner(now + dt, j, gj, kind));
         }
@@ -1024,7 +1059,15 @@ where
             let bj = &bodies[j as usize];
             let dr = (ri - shifts[neighbour::code(e) as usize]) - bj.position_at(now);
             let dv = bi.v - bj.v;
-            if let Some((dt, kind)) = model.predict(i, j, bi.species, bj.species, now, dr, dv) {
+            if let Some((dt, kind)) = model.predict(&Pair {
+                i,
+                j,
+                si: bi.species,
+                sj: bj.species,
+                now,
+                dr,
+                dv,
+            }) {
                 let time = now + dt;
                 earliest = earliest.min(time);
                 lists.push(i, Event::with_partner(time, j, bj.generation, kind));
@@ -1492,10 +1535,18 @@ where
                         }
                         let bj = &self.bodies[j as usize];
                         let dr = ri - (bj.position_at(self.now) + shift);
-                        if let Err(e) = self
-                            .model
-                            .check_pair(i, j, bi.species, bj.species, self.now, dr, listed)
-                        {
+                        if let Err(e) = self.model.check_pair(
+                            &Pair {
+                                i,
+                                j,
+                                si: bi.species,
+                                sj: bj.species,
+                                now: self.now,
+                                dr,
+                                dv: bi.v - bj.v,
+                            },
+                            listed,
+                        ) {
                             err = Err(e);
                             return;
                         }

@@ -84,7 +84,7 @@ use rand_xoshiro::Xoshiro256PlusPlus;
 use root_search::{Adaptive, Crossing, Grid, Method, SearchError};
 
 use crate::engine::event::{Boundary, Kind};
-use crate::engine::model::{Executed, PairClass, PairModel, PairSetupError, Report};
+use crate::engine::model::{Executed, Pair, PairClass, PairModel, PairSetupError, Report};
 use crate::engine::pair_state::{SavedSearches, SiteLevels};
 use crate::engine::potential::Potentials;
 use crate::models::search::{SearchMethod, SearchSettings, SearchStats, bracket, check_settings};
@@ -1165,14 +1165,8 @@ impl PairModel for Flexible {
         self.types[s as usize].mass
     }
 
-    fn setup_pair(
-        &mut self,
-        i: u32,
-        j: u32,
-        _si: u32,
-        _sj: u32,
-        dr: DVec3,
-    ) -> Result<(), PairSetupError> {
+    fn setup_pair(&mut self, pair: &Pair) -> Result<(), PairSetupError> {
+        let Pair { i, j, dr, .. } = *pair;
         let tp = self.type_pair(i, j);
         let (qi, qj) = (
             self.trajectories[i as usize].initial().0.to_vec(),
@@ -1195,16 +1189,10 @@ impl PairModel for Flexible {
         Ok(())
     }
 
-    fn predict(
-        &mut self,
-        i: u32,
-        j: u32,
-        _si: u32,
-        _sj: u32,
-        now: f64,
-        dr: DVec3,
-        dv: DVec3,
-    ) -> Option<(f64, Kind)> {
+    fn predict(&mut self, pair: &Pair) -> Option<(f64, Kind)> {
+        let Pair {
+            i, j, now, dr, dv, ..
+        } = *pair;
         let tp = self.type_pair(i, j);
         let reach = self.type_pairs[tp].reach;
         let (start, _) = bracket(dr, dv, reach * reach)?;
@@ -1220,16 +1208,10 @@ impl PairModel for Flexible {
         self.start_sites(i, j, now, dr, dv)
     }
 
-    fn resume(
-        &mut self,
-        i: u32,
-        j: u32,
-        _si: u32,
-        _sj: u32,
-        now: f64,
-        dr: DVec3,
-        dv: DVec3,
-    ) -> Option<(f64, Kind)> {
+    fn resume(&mut self, pair: &Pair) -> Option<(f64, Kind)> {
+        let Pair {
+            i, j, now, dr, dv, ..
+        } = *pair;
         match self.pending.take(i, j, now)? {
             Pending::Later => self.start_sites(i, j, now, dr, dv),
             Pending::Sites(sites) => self.advance(i, j, now, dr, dv, sites, false),
@@ -1239,16 +1221,12 @@ impl PairModel for Flexible {
 
     fn execute(
         &mut self,
-        i: u32,
-        j: u32,
-        _si: u32,
-        _sj: u32,
-        now: f64,
+        pair: &Pair,
         _boundary: Boundary,
-        dr: DVec3,
         vi: &mut DVec3,
         vj: &mut DVec3,
     ) -> Result<Executed, CollideError> {
+        let Pair { i, j, now, dr, .. } = *pair;
         let skipped = |overlap| Executed {
             class: PairClass::Skipped,
             delta_u: 0.0,
@@ -1373,16 +1351,8 @@ impl PairModel for Flexible {
         false
     }
 
-    fn configured_level(
-        &self,
-        i: u32,
-        j: u32,
-        _si: u32,
-        _sj: u32,
-        now: f64,
-        dr: DVec3,
-        _stored: u16,
-    ) -> (u16, f64) {
+    fn configured_level(&self, pair: &Pair, _stored: u16) -> (u16, f64) {
+        let Pair { i, j, now, dr, .. } = *pair;
         let (Ok((qi, _)), Ok((qj, _))) = (self.internal_state(i, now), self.internal_state(j, now))
         else {
             return (0, f64::INFINITY);
@@ -1421,16 +1391,8 @@ impl PairModel for Flexible {
         e
     }
 
-    fn check_pair(
-        &self,
-        i: u32,
-        j: u32,
-        _si: u32,
-        _sj: u32,
-        now: f64,
-        dr: DVec3,
-        listed: bool,
-    ) -> Result<(), String> {
+    fn check_pair(&self, pair: &Pair, listed: bool) -> Result<(), String> {
+        let Pair { i, j, now, dr, .. } = *pair;
         let (qi, _) = self
             .internal_state(i, now)
             .map_err(|e| format!("molecule {i}: {e}"))?;

@@ -73,7 +73,7 @@ use rigid_free::{FreeMotion, Moments};
 use root_search::{Adaptive, Crossing, Grid, Method, SearchError};
 
 use crate::engine::event::{Boundary, Kind};
-use crate::engine::model::{Executed, PairClass, PairModel, PairSetupError, Report};
+use crate::engine::model::{Executed, Pair, PairClass, PairModel, PairSetupError, Report};
 use crate::engine::pair_state::{SavedSearches, SiteLevels};
 use crate::engine::potential::Potentials;
 use crate::models::search::{SearchMethod, SearchSettings, SearchStats, bracket, check_settings};
@@ -1125,14 +1125,8 @@ impl PairModel for Sites {
         self.types[s as usize].mass
     }
 
-    fn setup_pair(
-        &mut self,
-        i: u32,
-        j: u32,
-        _si: u32,
-        _sj: u32,
-        dr: DVec3,
-    ) -> Result<(), PairSetupError> {
+    fn setup_pair(&mut self, pair: &Pair) -> Result<(), PairSetupError> {
+        let Pair { i, j, dr, .. } = *pair;
         let t = self.rotations[i as usize].t;
         let (oi, _) = self.pose(i, t);
         let (oj, _) = self.pose(j, t);
@@ -1160,16 +1154,10 @@ impl PairModel for Sites {
         Ok(())
     }
 
-    fn predict(
-        &mut self,
-        i: u32,
-        j: u32,
-        _si: u32,
-        _sj: u32,
-        now: f64,
-        dr: DVec3,
-        dv: DVec3,
-    ) -> Option<(f64, Kind)> {
+    fn predict(&mut self, pair: &Pair) -> Option<(f64, Kind)> {
+        let Pair {
+            i, j, now, dr, dv, ..
+        } = *pair;
         let tp = self.type_pair(i, j);
         let reach = self.type_pairs[tp].reach;
         let (start, _) = bracket(dr, dv, reach * reach)?;
@@ -1186,16 +1174,10 @@ impl PairModel for Sites {
         self.start_sites(i, j, now, dr, dv)
     }
 
-    fn resume(
-        &mut self,
-        i: u32,
-        j: u32,
-        _si: u32,
-        _sj: u32,
-        now: f64,
-        dr: DVec3,
-        dv: DVec3,
-    ) -> Option<(f64, Kind)> {
+    fn resume(&mut self, pair: &Pair) -> Option<(f64, Kind)> {
+        let Pair {
+            i, j, now, dr, dv, ..
+        } = *pair;
         match self.pending.take(i, j, now)? {
             Pending::Later => self.start_sites(i, j, now, dr, dv),
             Pending::Sites(sites) => self.advance(i, j, now, dr, dv, sites, false),
@@ -1205,16 +1187,12 @@ impl PairModel for Sites {
 
     fn execute(
         &mut self,
-        i: u32,
-        j: u32,
-        _si: u32,
-        _sj: u32,
-        now: f64,
+        pair: &Pair,
         _boundary: Boundary,
-        dr: DVec3,
         vi: &mut DVec3,
         vj: &mut DVec3,
     ) -> Result<Executed, CollideError> {
+        let Pair { i, j, now, dr, .. } = *pair;
         let skipped = |overlap| Executed {
             class: PairClass::Skipped,
             delta_u: 0.0,
@@ -1345,16 +1323,8 @@ impl PairModel for Sites {
         false
     }
 
-    fn configured_level(
-        &self,
-        i: u32,
-        j: u32,
-        _si: u32,
-        _sj: u32,
-        now: f64,
-        dr: DVec3,
-        _stored: u16,
-    ) -> (u16, f64) {
+    fn configured_level(&self, pair: &Pair, _stored: u16) -> (u16, f64) {
+        let Pair { i, j, now, dr, .. } = *pair;
         let (lo, hi) = (i.min(j), i.max(j));
         // `dr` is r_i − r_j: orient it from the lower index like the stored levels.
         let dr = if i == lo { dr } else { -dr };
@@ -1402,16 +1372,8 @@ impl PairModel for Sites {
         e
     }
 
-    fn check_pair(
-        &self,
-        i: u32,
-        j: u32,
-        _si: u32,
-        _sj: u32,
-        now: f64,
-        dr: DVec3,
-        listed: bool,
-    ) -> Result<(), String> {
+    fn check_pair(&self, pair: &Pair, listed: bool) -> Result<(), String> {
+        let Pair { i, j, now, dr, .. } = *pair;
         let tp = self.type_pair(i, j);
         let (oi, _) = self.pose(i, now);
         let (oj, _) = self.pose(j, now);
@@ -1908,12 +1870,28 @@ mod pair_tests {
             let dr = DVec3::new(3.0, 0.0, 0.0);
             let dv = DVec3::new(-1.0, 0.0, 0.0);
             let mut now = 0.0;
-            let mut out = m.predict(0, 1, 0, 0, now, dr, dv);
+            let mut out = m.predict(&Pair {
+                i: 0,
+                j: 1,
+                si: 0,
+                sj: 0,
+                now,
+                dr,
+                dv,
+            });
             let mut virtuals = 0;
             while let Some((dt, Kind::Virtual)) = out {
                 now += dt;
                 virtuals += 1;
-                out = m.resume(0, 1, 0, 0, now, dr + dv * now, dv);
+                out = m.resume(&Pair {
+                    i: 0,
+                    j: 1,
+                    si: 0,
+                    sj: 0,
+                    now,
+                    dr: dr + dv * now,
+                    dv,
+                });
                 assert!(virtuals < 100);
             }
             // The bounding spheres (reach 1 + 0.3 + 0.3) meet at t = 1.4: nothing before.

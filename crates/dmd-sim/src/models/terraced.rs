@@ -50,7 +50,7 @@ use rigid_free::LinearRotor;
 use root_search::{Adaptive, Crossing, Grid, Method, SearchError, SearchState};
 
 use crate::engine::event::{Boundary, Kind};
-use crate::engine::model::{Executed, PairClass, PairModel, PairSetupError, Report};
+use crate::engine::model::{Executed, Pair, PairClass, PairModel, PairSetupError, Report};
 use crate::engine::pair_state::{PairStates, SavedSearches};
 use crate::models::search::{SearchMethod, SearchSettings, SearchStats, bracket};
 
@@ -798,14 +798,10 @@ impl<P: PairPotential> PairModel for Terraced<P> {
         self.species[s as usize].mass
     }
 
-    fn setup_pair(
-        &mut self,
-        i: u32,
-        j: u32,
-        si: u32,
-        sj: u32,
-        dr: DVec3,
-    ) -> Result<(), PairSetupError> {
+    fn setup_pair(&mut self, pair: &Pair) -> Result<(), PairSetupError> {
+        let Pair {
+            i, j, si, sj, dr, ..
+        } = *pair;
         let t = self.rods[i as usize].t;
         let u = self.energy(i, j, si, sj, t, dr);
         let pt = self.pair(si, sj);
@@ -824,16 +820,16 @@ impl<P: PairPotential> PairModel for Terraced<P> {
     }
 
     #[inline]
-    fn predict(
-        &mut self,
-        i: u32,
-        j: u32,
-        si: u32,
-        sj: u32,
-        now: f64,
-        dr: DVec3,
-        dv: DVec3,
-    ) -> Option<(f64, Kind)> {
+    fn predict(&mut self, pair: &Pair) -> Option<(f64, Kind)> {
+        let Pair {
+            i,
+            j,
+            si,
+            sj,
+            now,
+            dr,
+            dv,
+        } = *pair;
         let pt = self.pair(si, sj);
         let k = if dr.length_squared() > pt.reach2 {
             pt.zero
@@ -869,16 +865,16 @@ impl<P: PairPotential> PairModel for Terraced<P> {
         )
     }
 
-    fn resume(
-        &mut self,
-        i: u32,
-        j: u32,
-        si: u32,
-        sj: u32,
-        now: f64,
-        dr: DVec3,
-        dv: DVec3,
-    ) -> Option<(f64, Kind)> {
+    fn resume(&mut self, pair: &Pair) -> Option<(f64, Kind)> {
+        let Pair {
+            i,
+            j,
+            si,
+            sj,
+            now,
+            dr,
+            dv,
+        } = *pair;
         let from = self.pending.take(i, j, now)?;
         let pt = self.pair(si, sj);
         let k = pt.terrace(self.states.get(i, j));
@@ -887,16 +883,20 @@ impl<P: PairPotential> PairModel for Terraced<P> {
 
     fn execute(
         &mut self,
-        i: u32,
-        j: u32,
-        si: u32,
-        sj: u32,
-        now: f64,
+        pair: &Pair,
         boundary: Boundary,
-        dr: DVec3,
         vi: &mut DVec3,
         vj: &mut DVec3,
     ) -> Result<Executed, collide::CollideError> {
+        let Pair {
+            i,
+            j,
+            si,
+            sj,
+            now,
+            dr,
+            ..
+        } = *pair;
         let table = self.table[si as usize * self.n_species + sj as usize] as usize;
         let pt = &self.pairs[table];
         let v = self.states.get(i, j);
@@ -984,16 +984,16 @@ impl<P: PairPotential> PairModel for Terraced<P> {
         pt.map.energies()[pt.terrace(v) as usize]
     }
 
-    fn check_pair(
-        &self,
-        i: u32,
-        j: u32,
-        si: u32,
-        sj: u32,
-        now: f64,
-        dr: DVec3,
-        listed: bool,
-    ) -> Result<(), String> {
+    fn check_pair(&self, pair: &Pair, listed: bool) -> Result<(), String> {
+        let Pair {
+            i,
+            j,
+            si,
+            sj,
+            now,
+            dr,
+            ..
+        } = *pair;
         let pt = self.pair(si, sj);
         let d = dr.length();
         if d < pt.reach && !listed {
@@ -1118,16 +1118,16 @@ impl<P: PairPotential> PairModel for Terraced<P> {
             && level < self.pair(si, sj).terraces
     }
 
-    fn configured_level(
-        &self,
-        i: u32,
-        j: u32,
-        si: u32,
-        sj: u32,
-        now: f64,
-        dr: DVec3,
-        stored: u16,
-    ) -> (u16, f64) {
+    fn configured_level(&self, pair: &Pair, stored: u16) -> (u16, f64) {
+        let Pair {
+            i,
+            j,
+            si,
+            sj,
+            now,
+            dr,
+            ..
+        } = *pair;
         let pt = self.pair(si, sj);
         let u = self.energy(i, j, si, sj, now, dr);
         let Ok(expected) = pt.map.terrace_of(u) else {
@@ -1408,26 +1408,86 @@ mod tests {
         .unwrap();
         // Well within reach, slowly approaching: every call stops at its window.
         let (dr, dv) = (DVec3::new(1.6, 0.1, 0.0), DVec3::new(-0.05, 0.0, 0.0));
-        let (dt1, k1) = model.predict(0, 1, 0, 0, 0.0, dr, dv).unwrap();
+        let (dt1, k1) = model
+            .predict(&Pair {
+                i: 0,
+                j: 1,
+                si: 0,
+                sj: 0,
+                now: 0.0,
+                dr,
+                dv,
+            })
+            .unwrap();
         assert_eq!(k1, Kind::Virtual);
         let later = 0.25 * dt1;
         let (dt2, k2) = model
-            .predict(0, 1, 0, 0, later, dr + dv * later, dv)
+            .predict(&Pair {
+                i: 0,
+                j: 1,
+                si: 0,
+                sj: 0,
+                now: later,
+                dr: dr + dv * later,
+                dv,
+            })
             .unwrap();
         assert_eq!(k2, Kind::Virtual);
         let (t1, t2) = (dt1, later + dt2);
         assert!(t2 > t1, "{t1} {t2}");
         // The stale event is due first: nothing to continue.
-        assert_eq!(model.resume(0, 1, 0, 0, t1, dr + dv * t1, dv), None);
+        assert_eq!(
+            model.resume(&Pair {
+                i: 0,
+                j: 1,
+                si: 0,
+                sj: 0,
+                now: t1,
+                dr: dr + dv * t1,
+                dv
+            }),
+            None
+        );
         // The live one continues its search from where the second call stopped.
         let (dt3, _) = model
-            .resume(0, 1, 0, 0, t2, dr + dv * t2, dv)
+            .resume(&Pair {
+                i: 0,
+                j: 1,
+                si: 0,
+                sj: 0,
+                now: t2,
+                dr: dr + dv * t2,
+                dv,
+            })
             .expect("the live virtual event resumes its search");
         assert!(dt3 > 0.0);
         // Taken once: the same event cannot be resumed twice.
         let t3 = t2 + dt3;
-        assert_eq!(model.resume(0, 1, 0, 0, t2, dr + dv * t2, dv), None);
-        assert!(model.resume(0, 1, 0, 0, t3, dr + dv * t3, dv).is_some());
+        assert_eq!(
+            model.resume(&Pair {
+                i: 0,
+                j: 1,
+                si: 0,
+                sj: 0,
+                now: t2,
+                dr: dr + dv * t2,
+                dv
+            }),
+            None
+        );
+        assert!(
+            model
+                .resume(&Pair {
+                    i: 0,
+                    j: 1,
+                    si: 0,
+                    sj: 0,
+                    now: t3,
+                    dr: dr + dv * t3,
+                    dv
+                })
+                .is_some()
+        );
     }
 
     #[test]

@@ -26,7 +26,7 @@ use super::{Phase, Simulation, Skip};
 use crate::engine::body::Body;
 use crate::engine::cell::CellGrid;
 use crate::engine::event::EventLists;
-use crate::engine::model::PairModel;
+use crate::engine::model::{Pair, PairModel};
 use crate::engine::neighbour::{self, NeighbourLists};
 use crate::engine::schedule::Scheduler;
 use crate::engine::simulation::{Andersen, Anomalies, Counters, LoopSettings};
@@ -570,9 +570,18 @@ where
                 if stored == 0 && dr.length_squared() >= reach * reach {
                     continue;
                 }
-                let (level, energy) = self
-                    .model
-                    .configured_level(i, j, bi.species, bj.species, now, dr, stored);
+                let (level, energy) = self.model.configured_level(
+                    &Pair {
+                        i,
+                        j,
+                        si: bi.species,
+                        sj: bj.species,
+                        now,
+                        dr,
+                        dv: bi.v - bj.v,
+                    },
+                    stored,
+                );
                 f(i, j, stored, level, energy);
             }
         }
