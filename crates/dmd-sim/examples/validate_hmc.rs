@@ -16,7 +16,7 @@ use std::time::Instant;
 
 use collide::Particle;
 use dmd_sim::checkpoint::{self, Every, SceneSource};
-use dmd_sim::hmc::{Acceptance, Chain, Ensemble, Faulty, HmcSettings, block_average};
+use dmd_sim::hmc::{Acceptance, Chain, Ensemble, HmcSettings, block_average};
 use dmd_sim::model::{HardSpheres, Stepped};
 use dmd_sim::output::{Curve, plot_svg};
 use dmd_sim::potential::Potentials;
@@ -95,11 +95,7 @@ fn exact_well() -> f64 {
 /// acceptance, ⟨e^{−βΔH}⟩, CPU seconds.
 fn two_body(fault: f64, acceptance: Acceptance, segments: usize, seed: u64) -> [f64; 5] {
     let pots = Potentials::from_tables(1, &[((0, 0), vec![[1.0, f64::INFINITY], [1.5, -1.0]])]);
-    let model = Faulty::new(
-        Stepped::new(pots, vec![Particle::new(1.0).unwrap()], 2),
-        fault,
-        seed,
-    );
+    let model = Stepped::new(pots, vec![Particle::new(1.0).unwrap()], 2);
     let mut sim: Simulation<_, Heap> = Simulation::new(
         DVec3::splat(L2),
         &[DVec3::new(1.0, 1.0, 1.0), DVec3::new(3.5, 3.0, 2.0)],
@@ -115,6 +111,7 @@ fn two_body(fault: f64, acceptance: Acceptance, segments: usize, seed: u64) -> [
         },
     )
     .expect("a valid start");
+    sim.set_fault_fraction(fault, seed);
     let mut chain = Chain::new(
         HmcSettings {
             ensemble: Ensemble::Canonical,

@@ -5,10 +5,11 @@
 //! well depth ε = 1 out to λ = 1.5, kT = 1): the probability that the pair is on a level is
 //! exactly the Boltzmann-weighted volume of its shell, `P(s) = V_s e^{−βU_s} / Z`, with
 //! `Z = Σ V_s e^{−βU_s}` (the core's weight is 0). Misses are injected deliberately
-//! (`hmc::Faulty`: the pair is blind to its events in a random fraction of the segments).
+//! (`Simulation::set_fault_fraction`: the pair is blind to its events in a random fraction of
+//! the segments).
 
 use collide::Particle;
-use dmd_sim::hmc::{Acceptance, Chain, Ensemble, Faulty, HmcSettings, Outcome};
+use dmd_sim::hmc::{Acceptance, Chain, Ensemble, HmcSettings, Outcome};
 use dmd_sim::model::{PairModel, Stepped};
 use dmd_sim::potential::Potentials;
 use dmd_sim::simulation::{LoopSettings, Simulation};
@@ -158,13 +159,14 @@ fn exact_dynamics_accepts_every_segment_and_samples_the_canonical_levels() {
 fn missed_events_are_repaired_by_hmc_but_bias_plain_dynamics() {
     // The pair is blind in 30 % of the segments: it flies through its core and its well edge.
     let faulty = |seed| {
-        Faulty::new(
+        let mut sim = two_bodies(
             Stepped::new(well(), vec![Particle::new(1.0).unwrap()], 2),
-            0.3,
-            seed,
-        )
+            false,
+        );
+        sim.set_fault_fraction(0.3, seed);
+        sim
     };
-    let mut sim = two_bodies(faulty(5), false);
+    let mut sim = faulty(5);
     let mut chain = Chain::new(
         settings(Ensemble::Canonical, Acceptance::Metropolis, 12),
         false,
@@ -192,7 +194,7 @@ fn missed_events_are_repaired_by_hmc_but_bias_plain_dynamics() {
 
     // The same faulty segments accepted blindly: the well is under-populated and the core
     // entered; the deviation is many standard errors.
-    let mut sim = two_bodies(faulty(5), false);
+    let mut sim = faulty(5);
     let mut plain = Chain::new(settings(Ensemble::Canonical, Acceptance::Always, 12), false);
     let p = sample(&mut sim, &mut plain, 6000);
     let exact = exact_levels();
@@ -222,11 +224,7 @@ fn transitions_balance_in_a_tiny_system() {
         1,
         &[((0, 0), vec![[1.0, f64::INFINITY], [1.3, -1.0], [1.6, 0.5]])],
     );
-    let model = Faulty::new(
-        Stepped::new(pots, vec![Particle::new(1.0).unwrap()], 2),
-        0.3,
-        9,
-    );
+    let model = Stepped::new(pots, vec![Particle::new(1.0).unwrap()], 2);
     let mut sim: Simulation<_, Queue> = Simulation::new(
         DVec3::splat(5.5),
         &[DVec3::new(1.0, 1.0, 1.0), DVec3::new(3.5, 3.0, 2.0)],
@@ -236,6 +234,7 @@ fn transitions_balance_in_a_tiny_system() {
         loop_settings(false),
     )
     .unwrap();
+    sim.set_fault_fraction(0.3, 9);
     let mut set = settings(Ensemble::Canonical, Acceptance::Metropolis, 13);
     set.segment_time = 0.5;
     let mut chain = Chain::new(set, false);
@@ -288,11 +287,7 @@ fn microcanonical_chain_keeps_the_energy_and_rejects_every_missed_step() {
         DVec3::new(-0.8, -0.9, 0.8),
     ];
     for (fault, seed) in [(0.0, 21), (0.2, 22)] {
-        let model = Faulty::new(
-            Stepped::new(well(), vec![Particle::new(1.0).unwrap()], 4),
-            fault,
-            seed,
-        );
+        let model = Stepped::new(well(), vec![Particle::new(1.0).unwrap()], 4);
         let mut sim: Simulation<_, Queue> = Simulation::new(
             DVec3::splat(L),
             &pos,
@@ -302,6 +297,7 @@ fn microcanonical_chain_keeps_the_energy_and_rejects_every_missed_step() {
             loop_settings(fault == 0.0),
         )
         .unwrap();
+        sim.set_fault_fraction(fault, seed);
         let e0 = sim.true_energy().total();
         let (p0, _) = sim.momentum_and_mass();
         let mut chain = Chain::new(

@@ -24,7 +24,8 @@
 //! reversible and volume preserving, so with exact event times every segment is accepted
 //! (`ΔH` is round-off) and the chain is plain molecular dynamics with momentum refreshes.
 //!
-//! **Fault injection** ([`Faulty`], scene key `hmc.fault_fraction`) is a validation tool: the
+//! **Fault injection** (scene key `hmc.fault_fraction`, the loop's
+//! [`Blindfold`](crate::engine::fault::Blindfold)) is a validation tool: the
 //! sphere engine's event times are analytic and it misses nothing, so to show that HMC
 //! repairs misses, misses are made deliberately. In each segment a pseudo-random fraction of
 //! the pairs (drawn afresh per segment from the seed) is *blind*: none of its events is
@@ -44,8 +45,7 @@ use serde::{Deserialize, Serialize};
 use glam::DVec3;
 
 pub use crate::analysis::block::{BlockEstimate, block_average};
-use crate::engine::event::{Boundary, Kind};
-use crate::engine::model::{Executed, Pair, PairModel, PairSetupError};
+use crate::engine::model::PairModel;
 use crate::engine::schedule::Scheduler;
 use crate::engine::simulation::{NoSampler, SimError, Simulation, Stop};
 
@@ -222,7 +222,7 @@ impl Chain {
     ) -> Result<Segment, SimError> {
         let index = self.next_index;
         self.next_index += 1;
-        sim.model_mut().begin_segment(index);
+        sim.begin_segment(index);
         let settings = &self.settings;
         let rng = &mut self.rng;
         match settings.ensemble {
@@ -514,201 +514,9 @@ pub struct HmcSummary {
     pub overlapping_states: u64,
 }
 
-/// Fault injection (a validation tool, see the module documentation): wraps a model and hides
-/// a fraction of the pairs from the event predictions in each HMC segment. Before the first
-/// segment (plain equilibration) it hides nothing.
-#[derive(Clone, Debug)]
-pub struct Faulty<M> {
-    inner: M,
-    threshold: u64,
-    salt: u64,
-    key: u64,
-    active: bool,
-}
-
-impl<M> Faulty<M> {
-    /// Hides about `fraction` (in `[0, 1)`) of the pairs per segment, chosen from `seed`.
-    pub fn new(inner: M, fraction: f64, seed: u64) -> Self {
-        let threshold = (fraction.clamp(0.0, 1.0) * 18_446_744_073_709_551_616.0) as u64;
-        Faulty {
-            inner,
-            threshold,
-            salt: mix(seed ^ 0xfa17_0000_0000_0009),
-            key: 0,
-            active: false,
-        }
-    }
-
-    /// Whether pair `(i, j)` is hidden in the present segment.
-    #[inline]
-    pub fn blind(&self, i: u32, j: u32) -> bool {
-        let (a, b) = if i < j { (i, j) } else { (j, i) };
-        self.active && mix(self.key ^ (u64::from(a) << 32 | u64::from(b))) < self.threshold
-    }
-
-    /// The wrapped model.
-    pub fn inner(&self) -> &M {
-        &self.inner
-    }
-}
-
-/// SplitMix64's finaliser: a well-mixed 64-bit hash.
-fn mix(mut z: u64) -> u64 {
-    z = z.wrapping_add(0x9e37_79b9_7f4a_7c15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    z ^ (z >> 31)
-}
-
-impl<M: PairModel> PairModel for Faulty<M> {
-    fn reach(&self) -> f64 {
-        self.inner.reach()
-    }
-
-    fn n_species(&self) -> usize {
-        self.inner.n_species()
-    }
-
-    fn mass(&self, s: u32) -> f64 {
-        self.inner.mass(s)
-    }
-
-    fn setup_pair(&mut self, pair: &Pair) -> Result<(), PairSetupError> {
-        self.inner.setup_pair(pair)
-    }
-
-    #[inline]
-    fn predict(&mut self, pair: &Pair) -> Option<(f64, Kind)> {
-        if self.blind(pair.i, pair.j) {
-            return None;
-        }
-        self.inner.predict(pair)
-    }
-
-    fn resume(&mut self, pair: &Pair) -> Option<(f64, Kind)> {
-        if self.blind(pair.i, pair.j) {
-            return None;
-        }
-        self.inner.resume(pair)
-    }
-
-    fn execute(
-        &mut self,
-        pair: &Pair,
-        boundary: Boundary,
-        vi: &mut DVec3,
-        vj: &mut DVec3,
-    ) -> Result<Executed, collide::CollideError> {
-        self.inner.execute(pair, boundary, vi, vj)
-    }
-
-    fn take_kinetic_error(&mut self) -> f64 {
-        self.inner.take_kinetic_error()
-    }
-
-    fn pair_energy(&self, i: u32, j: u32, si: u32, sj: u32) -> f64 {
-        self.inner.pair_energy(i, j, si, sj)
-    }
-
-    fn check_pair(&self, pair: &Pair, listed: bool) -> Result<(), String> {
-        self.inner.check_pair(pair, listed)
-    }
-
-    fn forget(&mut self, i: u32) {
-        self.inner.forget(i);
-    }
-
-    fn rebase(&mut self, t0: f64) {
-        self.inner.rebase(t0);
-    }
-
-    fn level(&self, i: u32, j: u32) -> u16 {
-        self.inner.level(i, j)
-    }
-
-    fn set_level(&mut self, i: u32, j: u32, level: u16) {
-        self.inner.set_level(i, j, level);
-    }
-
-    fn clear_levels(&mut self) {
-        self.inner.clear_levels();
-    }
-
-    fn storable_level(&self, si: u32, sj: u32, level: u16) -> bool {
-        self.inner.storable_level(si, sj, level)
-    }
-
-    fn configured_level(&self, pair: &Pair, stored: u16) -> (u16, f64) {
-        self.inner.configured_level(pair, stored)
-    }
-
-    fn rotational_kinetic(&self) -> f64 {
-        self.inner.rotational_kinetic()
-    }
-
-    fn rotational_dof(&self) -> f64 {
-        self.inner.rotational_dof()
-    }
-
-    fn thermalize(
-        &mut self,
-        i: u32,
-        s: u32,
-        now: f64,
-        kt: f64,
-        rng: &mut Xoshiro256PlusPlus,
-    ) -> f64 {
-        self.inner.thermalize(i, s, now, kt, rng)
-    }
-
-    fn spin(&self, i: u32, s: u32) -> DVec3 {
-        self.inner.spin(i, s)
-    }
-
-    fn omega(&self, i: u32) -> DVec3 {
-        self.inner.omega(i)
-    }
-
-    fn axis(&self, i: u32, now: f64) -> Option<DVec3> {
-        self.inner.axis(i, now)
-    }
-
-    fn report(&self) -> crate::engine::model::Report {
-        self.inner.report()
-    }
-
-    fn draw_rotations(&mut self, now: f64, temperature: f64, rng: &mut Xoshiro256PlusPlus) {
-        self.inner.draw_rotations(now, temperature, rng);
-    }
-
-    fn reverse_rotations(&mut self) {
-        self.inner.reverse_rotations();
-    }
-
-    fn scale_rotations(&mut self, now: f64, factor: f64) {
-        self.inner.scale_rotations(now, factor);
-    }
-
-    fn begin_segment(&mut self, segment: u64) {
-        self.key = mix(self.salt ^ segment);
-        self.active = true;
-        self.inner.begin_segment(segment);
-    }
-
-    fn extra_state(&self) -> Vec<f64> {
-        self.inner.extra_state()
-    }
-
-    fn set_extra_state(&mut self, state: &[f64]) -> Result<(), String> {
-        self.inner.set_extra_state(state)
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::engine::potential::Potentials;
-    use collide::Particle;
 
     #[test]
     fn blocking_error_of_independent_and_correlated_series() {
@@ -734,27 +542,5 @@ mod tests {
             "{} vs {exact}",
             b.error
         );
-    }
-
-    #[test]
-    fn blind_pairs_are_symmetric_and_near_the_fraction() {
-        let pots = Potentials::from_tables(1, &[((0, 0), vec![[1.0, f64::INFINITY]])]);
-        let m = crate::engine::model::HardSpheres::new(pots, vec![Particle::new(1.0).unwrap()]);
-        let mut f = Faulty::new(m, 0.1, 7);
-        f.begin_segment(3);
-        let mut blind = 0;
-        for i in 0..200 {
-            for j in 0..i {
-                assert_eq!(f.blind(i, j), f.blind(j, i));
-                blind += u32::from(f.blind(i, j));
-            }
-        }
-        // 19 900 pairs, binomial(0.1): σ ≈ 42.
-        assert!((blind as f64 - 1990.0).abs() < 250.0, "{blind}");
-        let before: Vec<bool> = (0..50).map(|j| f.blind(100, j)).collect();
-        f.begin_segment(4);
-        let after: Vec<bool> = (0..50).map(|j| f.blind(100, j)).collect();
-        assert_ne!(before, after, "the blind set is drawn afresh per segment");
-        assert!(!Faulty::new(f.inner().clone(), 0.0, 7).blind(1, 2));
     }
 }

@@ -29,7 +29,7 @@ use crate::driver::checkpoint::{
     Checkpoint, CheckpointError, Every, Left, ObserverState, Problem, RunRecord, Saver,
     SceneSource, Stage,
 };
-use crate::driver::hmc::{Acceptance, Chain, Ensemble, Faulty, HmcSettings, HmcSummary};
+use crate::driver::hmc::{Acceptance, Chain, Ensemble, HmcSettings, HmcSummary};
 use crate::driver::reporting::write_observables;
 pub use crate::driver::reporting::{Quiet, Reporter, RunError, thread_cpu_seconds, unit_names};
 use crate::engine::model::{HardSpheres, PairModel, Stepped};
@@ -302,7 +302,7 @@ pub fn run_scene_with(
     }
     type Bounded = LazyQueue<BoundedQueue<Ticket>>;
     type Heap = LazyQueue<HeapQueue<Ticket>>;
-    // Issue 9: HMC fault injection (a validation tool) wraps the general stepped model; missed
+    // HMC fault injection (a validation tool) runs on the general stepped model; missed
     // events break the loop's invariants on purpose, so the debug checks are off.
     let fault = scene.hmc.as_ref().map_or(0.0, |h| h.fault_fraction);
     if fault > 0.0 {
@@ -337,7 +337,7 @@ pub fn run_scene_with(
             .iter()
             .map(|s| Particle::new(s.mass).expect("masses are checked"))
             .collect();
-        let model = Faulty::new(Stepped::new(potentials, particles, n), fault, scene.seed);
+        let model = Stepped::new(potentials, particles, n);
         let mut summary = ctx.go::<_, Heap>(model, reporter)?;
         summary.model = "stepped (fault injection)".to_owned();
         return Ok(summary);
@@ -508,6 +508,10 @@ impl Context<'_> {
             )
             .map_err(|e| setup_error(scene, self.config, &self.units, e))?,
         };
+        let fault = scene.hmc.as_ref().map_or(0.0, |h| h.fault_fraction);
+        if fault > 0.0 {
+            sim.set_fault_fraction(fault, scene.seed);
+        }
         let every = resume.map_or(self.options.checkpoint_every, |(_, c)| {
             self.options.checkpoint_every.or(c.every)
         });

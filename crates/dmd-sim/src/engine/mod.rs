@@ -7,6 +7,7 @@
 pub mod body;
 pub mod cell;
 pub mod event;
+pub(crate) mod fault;
 pub mod model;
 pub mod neighbour;
 pub mod pair_state;

@@ -290,11 +290,6 @@ pub trait PairModel {
     #[inline(always)]
     fn scale_rotations(&mut self, _now: f64, _factor: f64) {}
 
-    /// HMC begins segment number `segment` (the fault-injection wrapper of `hmc` re-draws
-    /// which pairs it hides; models do nothing).
-    #[inline(always)]
-    fn begin_segment(&mut self, _segment: u64) {}
-
     /// The model's state beyond the `Body` record and the pair levels (attitudes, angular
     /// velocities, counters), as numbers, at a re-basing of the time origin: HMC snapshots
     /// and checkpoints. Empty for spheres. What the model's predictions add (saved searches)

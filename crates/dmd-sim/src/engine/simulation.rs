@@ -35,6 +35,7 @@ use rand_xoshiro::Xoshiro256PlusPlus;
 use crate::engine::body::Body;
 use crate::engine::cell::CellGrid;
 use crate::engine::event::{Boundary, Event, EventLists, Kind, SystemEvent};
+use crate::engine::fault::Blindfold;
 use crate::engine::model::{Executed, Pair, PairClass, PairModel, PairSetupError};
 use crate::engine::neighbour::{self, NeighbourLists};
 use crate::engine::schedule::Scheduler;
@@ -362,6 +363,8 @@ pub struct Simulation<M, S> {
     phase: Phase,
     thermostat: Option<Andersen>,
     rng: Xoshiro256PlusPlus,
+    /// Pairs hidden from the predictions (HMC fault injection; inactive otherwise).
+    blindfold: Blindfold,
     next_thermostat: f64,
     sample_dt: Option<f64>,
     next_sample: f64,
@@ -531,6 +534,7 @@ where
             },
             thermostat: None,
             rng: Xoshiro256PlusPlus::seed_from_u64(settings.seed),
+            blindfold: Blindfold::default(),
             next_thermostat: f64::INFINITY,
             sample_dt: None,
             next_sample: f64::INFINITY,
@@ -776,6 +780,11 @@ where
         let dr = self.min_image(bi.position_at(now) - bj.position_at(now));
         let dv = bi.v - bj.v;
         let (si, sj, gj) = (bi.species, bj.species, bj.generation);
+        if self.blindfold.hides(i, j) {
+            self.counters.virtual_ += 1;
+            self.reschedule(i);
+            return;
+        }
         if let Some((dt, kind)) = self.model.resume(&Pair {
             i,
             j,
@@ -882,6 +891,9 @@ where
         let dr = bi.position_at(now) - (bj.position_at(now) + self.shifts[code as usize]);
         let dv = bi.v - bj.v;
         let (si, sj, gj) = (bi.species, bj.species, bj.generation);
+        if self.blindfold.hides(i, j) {
+            return;
+        }
         if let Some((dt, kind)) = self.model.predict(&Pair {
             i,
             j,
@@ -1043,17 +1055,18 @@ where
             Skip::One(o) => (o, false),
             Skip::Lower => (i, true),
         };
-        let (nbrs, bodies, model, lists, shifts) = (
+        let (nbrs, bodies, model, lists, shifts, blindfold) = (
             &self.nbrs,
             &self.bodies,
             &mut self.model,
             &mut self.lists,
             &self.shifts,
+            &self.blindfold,
         );
         let mut earliest = f64::INFINITY;
         for &e in nbrs.of(i) {
             let j = neighbour::partner(e);
-            if j == other || (lower && j < i) {
+            if j == other || (lower && j < i) || blindfold.hides(i, j) {
                 continue;
             }
             let bj = &bodies[j as usize];
@@ -1453,6 +1466,19 @@ where
     /// The cell grid.
     pub fn cells(&self) -> &CellGrid {
         &self.cells
+    }
+
+    /// Hides about `fraction` of the pairs from every event prediction in each HMC segment,
+    /// drawn afresh per segment from `seed` (fault injection, a validation tool of HMC; see
+    /// [`Blindfold`]). Nothing is hidden before the first [`begin_segment`](Self::begin_segment).
+    pub fn set_fault_fraction(&mut self, fraction: f64, seed: u64) {
+        self.blindfold = Blindfold::new(fraction, seed);
+    }
+
+    /// HMC begins segment number `segment`: the fault injection, if any, draws its hidden
+    /// pairs afresh.
+    pub fn begin_segment(&mut self, segment: u64) {
+        self.blindfold.begin_segment(segment);
     }
 
     /// The interaction model.

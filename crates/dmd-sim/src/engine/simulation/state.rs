@@ -26,6 +26,7 @@ use super::{Phase, Simulation, Skip};
 use crate::engine::body::Body;
 use crate::engine::cell::CellGrid;
 use crate::engine::event::EventLists;
+use crate::engine::fault::Blindfold;
 use crate::engine::model::{Pair, PairModel};
 use crate::engine::neighbour::{self, NeighbourLists};
 use crate::engine::schedule::Scheduler;
@@ -286,6 +287,7 @@ where
             DVec3::new(f64::from(o[0]), f64::from(o[1]), f64::from(o[2])) * state.lengths
         });
         let mut sim = Simulation {
+            blindfold: Blindfold::default(),
             bodies: Vec::new(),
             cell_of: Vec::new(),
             images: Vec::new(),
