@@ -104,7 +104,9 @@ pub struct Frame {
     /// empty: not written.
     pub type_shapes: Vec<Shape>,
     /// Free quantities, stored as `log/<key>`: e.g. `"time"` → `Chunk::scalar(t)` with the
-    /// simulated time in the simulation's time unit.
+    /// simulated time in the simulation's time unit. A key missing from a frame reads as frame
+    /// 0's value. Python's `gsd.hoomd` (5.x) fails on a frame that lacks a key frame 0 lacks
+    /// too: for files it should read, log the same keys in every frame from frame 0 on.
     pub log: BTreeMap<String, Chunk>,
 }
 

@@ -72,7 +72,9 @@ fn python_reads_what_rust_writes() {
     ];
     let n = 5;
     let mut frames = Vec::new();
-    for k in 0..4_u32 {
+    // 30 frames of 39 chunks, 30 of them logs with long names: the name list (1024 bytes) and
+    // the index (128 entries) both move to larger blocks on the way.
+    for k in 0..30_u32 {
         let position: Vec<[f32; 3]> = (0..n)
             .map(|i| {
                 let x = i as f32 * 0.3 + k as f32 * 0.01;
@@ -99,6 +101,13 @@ fn python_reads_what_rust_writes() {
         frame
             .log
             .insert("time".into(), Chunk::scalar(0.1 * f64::from(k) + 1e-3));
+        // gsd.hoomd reads only log keys that frame 0 has, so every frame logs the same.
+        for j in 0..30_u32 {
+            frame.log.insert(
+                format!("quantity_with_a_name_long_enough_to_fill_the_list_{j:02}"),
+                Chunk::scalar(j + k),
+            );
+        }
         frames.push(frame);
     }
     let mut writer = Writer::create(&path, "dmd gsd test").unwrap();
