@@ -122,15 +122,15 @@ impl Reader {
                 break;
             }
             check_entry(&e, entries.len(), &header, names.len(), len)?;
-            if let Some(prev) = entries.last() {
-                if e.frame < prev.frame {
-                    return Err(corrupt(&format!(
-                        "index entry {} is for frame {} after one for frame {}",
-                        entries.len(),
-                        e.frame,
-                        prev.frame
-                    )));
-                }
+            if let Some(prev) = entries.last()
+                && e.frame < prev.frame
+            {
+                return Err(corrupt(&format!(
+                    "index entry {} is for frame {} after one for frame {}",
+                    entries.len(),
+                    e.frame,
+                    prev.frame
+                )));
             }
             entries.push(e);
         }
@@ -274,6 +274,14 @@ impl Reader {
             },
         };
         let n = self.scalar::<u32>(frame, "particles/N")?.unwrap_or(0);
+        if u64::from(n) > self.len {
+            // Defaults for absent per-particle chunks would allocate N rows; a valid file
+            // stores at least a byte per particle somewhere.
+            return Err(corrupt(&format!(
+                "particles/N is {n} in a file of {} bytes",
+                self.len
+            )));
+        }
         let n0 = if frame == 0 {
             n
         } else {
@@ -351,10 +359,10 @@ impl Reader {
         if let Some(e) = self.find(frame, name) {
             return Ok((e, frame));
         }
-        if frame > 0 {
-            if let Some(e) = self.find(0, name) {
-                return Ok((e, 0));
-            }
+        if frame > 0
+            && let Some(e) = self.find(0, name)
+        {
+            return Ok((e, 0));
         }
         Err(Error::MissingChunk {
             name: name.to_string(),

@@ -275,7 +275,8 @@ impl Chunk {
     /// An `N × M` chunk from untyped values; `None` when `columns` is 0 or does not divide the
     /// number of values.
     pub fn from_values(values: Values, columns: u32) -> Option<Chunk> {
-        (columns > 0 && values.len() % columns as usize == 0).then_some(Chunk { values, columns })
+        (columns > 0 && values.len().is_multiple_of(columns as usize))
+            .then_some(Chunk { values, columns })
     }
 
     /// The elements, row-major.
