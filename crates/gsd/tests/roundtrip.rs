@@ -359,3 +359,68 @@ fn an_empty_file_has_no_frames_and_two_dimensional_frames_keep_their_dimension()
     assert_same(&got, &empty);
     std::fs::remove_file(&path).ok();
 }
+
+/// A file layer 1.0 file, built byte by byte: names in 64-byte slots, one frame of
+/// `configuration/step` (u64) and `particles/position` (f32, 1×3).
+#[test]
+fn a_file_layer_1_0_file_reads() {
+    let mut b = Vec::new();
+    b.extend_from_slice(&0x65DF_65DF_65DF_65DF_u64.to_le_bytes());
+    b.extend_from_slice(&256_u64.to_le_bytes()); // index location
+    b.extend_from_slice(&4_u64.to_le_bytes()); // index entries
+    b.extend_from_slice(&(256_u64 + 4 * 32).to_le_bytes()); // name list location
+    b.extend_from_slice(&4_u64.to_le_bytes()); // name list: 4 slots of 64 bytes
+    b.extend_from_slice(&(1_u32 << 16 | 3).to_le_bytes()); // schema hoomd 1.3
+    b.extend_from_slice(&(1_u32 << 16).to_le_bytes()); // file layer 1.0
+    let field = |text: &str| {
+        let mut f = [0u8; 64];
+        f[..text.len()].copy_from_slice(text.as_bytes());
+        f
+    };
+    let (app, schema) = (field("handmade"), field("hoomd"));
+    b.extend_from_slice(&app);
+    b.extend_from_slice(&schema);
+    b.resize(256, 0);
+    let data = 256 + 4 * 32 + 4 * 64;
+    let entry = |frame: u64, n: u64, loc: u64, m: u32, id: u16, ty: u8| {
+        let mut e = Vec::new();
+        e.extend_from_slice(&frame.to_le_bytes());
+        e.extend_from_slice(&n.to_le_bytes());
+        e.extend_from_slice(&loc.to_le_bytes());
+        e.extend_from_slice(&m.to_le_bytes());
+        e.extend_from_slice(&id.to_le_bytes());
+        e.extend_from_slice(&[ty, 0]);
+        e
+    };
+    b.extend(entry(0, 1, data, 1, 0, 4));
+    b.extend(entry(0, 1, data + 8, 3, 1, 9));
+    b.resize(256 + 4 * 32, 0);
+    b.extend_from_slice(&field("configuration/step"));
+    b.extend_from_slice(&field("particles/position"));
+    b.resize(data as usize, 0);
+    b.extend_from_slice(&42_u64.to_le_bytes());
+    for x in [1.5_f32, -2.0, 0.25] {
+        b.extend_from_slice(&x.to_le_bytes());
+    }
+    let path = scratch("v1.gsd");
+    std::fs::write(&path, &b).unwrap();
+
+    let mut r = Reader::open(&path).unwrap();
+    assert_eq!(r.file_version(), (1, 0));
+    assert_eq!(r.schema_version(), (1, 3));
+    assert_eq!(r.application(), "handmade");
+    assert_eq!(
+        r.chunk_names(),
+        ["configuration/step", "particles/position"]
+    );
+    assert_eq!(r.frames(), 1);
+    let p = r.read_chunk::<f32>(0, "particles/position").unwrap();
+    assert_eq!(p.data, [1.5, -2.0, 0.25]);
+    // No particles/N: the schema's default of 0 particles, so the stored row is too many.
+    assert!(matches!(r.read_frame(0), Err(Error::WrongShape { .. })));
+    assert!(matches!(
+        Writer::append_to(&path),
+        Err(Error::UnsupportedVersion { major: 1, .. })
+    ));
+    std::fs::remove_file(&path).ok();
+}
