@@ -34,6 +34,12 @@ pub(crate) const STEPS: &[Step] = &[
         "cargo clippy --workspace --all-targets -- -D warnings",
         &[],
     ),
+    // The gsd crate's tests exchange files with the reference Python package.
+    (
+        "python packages",
+        "python3 -m pip install --quiet --disable-pip-version-check gsd numpy",
+        &[],
+    ),
     ("tests", TEST_COMMAND, &[]),
     (
         "docs",
