@@ -22,6 +22,10 @@
 //! - [`certify`]: certified event prediction, a Taylor model with a rigorous remainder of an
 //!   effective coordinate (`r`, or the rods' `r_e`) that proves stretches of free flight
 //!   without a level crossing;
+//! - [`RigidPairPotential`] (the [`rigid`] module): the same energy, force and both torques for
+//!   bodies of any shape, from the separation and each body's whole attitude (a [`RigidGeometry`]
+//!   with one `DQuat` per body; 003 Eqs. 4–6 generalised); [`Uniaxial`] makes every
+//!   [`PairPotential`] one (axis = attitude · body `ẑ`), bit for bit;
 //! - [`reach`], [`virial`], [`quadrature`]: the reach of a level for any potential, second virial
 //!   coefficients of the smooth and terraced potentials, and the quadrature behind them.
 //!
@@ -59,6 +63,7 @@ mod placement;
 pub mod profile;
 pub mod quadrature;
 pub mod reach;
+pub mod rigid;
 mod rod;
 mod smoothing;
 mod solve;
@@ -72,6 +77,7 @@ pub use lennard_jones::LennardJones;
 pub use pair::{Invariants, PairEval, PairGeometry, PairPotential, Partials};
 pub use placement::{Layout, Placement, StepEnergy};
 pub use profile::{Profile, Shell};
+pub use rigid::{RigidGeometry, RigidPairPotential, Uniaxial};
 pub use rod::LjRod;
 pub use smoothing::Smoothed;
 pub use terrace::{
