@@ -167,7 +167,9 @@ impl<P: PairPotential> RigidPairPotential for Uniaxial<P> {
     #[inline]
     fn evaluate(&self, g: &RigidGeometry) -> Result<PairEval, PotentialError> {
         if !g.is_finite() {
-            return Err(PotentialError::NotFinite("rigid pair geometry (r_ij, q_i or q_j)"));
+            return Err(PotentialError::NotFinite(
+                "rigid pair geometry (r_ij, q_i or q_j)",
+            ));
         }
         self.0.evaluate(&g.axes())
     }
@@ -207,7 +209,11 @@ mod tests {
 
     #[test]
     fn non_finite_geometry_is_refused() {
-        let g = RigidGeometry::new(DVec3::new(f64::NAN, 0.0, 0.0), DQuat::IDENTITY, DQuat::IDENTITY);
+        let g = RigidGeometry::new(
+            DVec3::new(f64::NAN, 0.0, 0.0),
+            DQuat::IDENTITY,
+            DQuat::IDENTITY,
+        );
         assert!(matches!(
             Uniaxial(LjRod::paper()).evaluate(&g),
             Err(PotentialError::NotFinite(_))
