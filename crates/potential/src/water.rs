@@ -181,6 +181,18 @@ impl SsdParameters {
 /// A soft sticky dipole water model (module documentation): Lennard-Jones plus point dipole,
 /// switched off at a cut-off, plus the tetrahedral sticky potential. A
 /// [`RigidPairPotential`]: the molecule has no axis of symmetry.
+///
+/// ```
+/// use potential::{RigidPairPotential, SoftStickyDipole};
+///
+/// let water = SoftStickyDipole::ssd_e();
+/// let g = SoftStickyDipole::hydrogen_bond(2.75); // donor i, acceptor j, 2.75 Å apart
+/// let e = water.evaluate(&g)?;
+/// assert!((e.energy - -7.579_38).abs() < 1e-5); // kJ/mol, by hand in tests/rigid_water.rs
+/// assert!(e.torque_imbalance(g.r_ij) < 1e-14); // 003 Eq. 6
+/// assert!(water.minimum() <= e.energy && water.reach(-1.0)? <= water.cutoff());
+/// # Ok::<(), potential::PotentialError>(())
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SoftStickyDipole {
     p: SsdParameters,
