@@ -22,6 +22,13 @@
 //! - [`certify`]: certified event prediction, a Taylor model with a rigorous remainder of an
 //!   effective coordinate (`r`, or the rods' `r_e`) that proves stretches of free flight
 //!   without a level crossing;
+//! - [`RigidPairPotential`] (the [`rigid`] module): the same energy, force and both torques for
+//!   bodies of any shape, from the separation and each body's whole attitude (a [`RigidGeometry`]
+//!   with one `DQuat` per body; 003 Eqs. 4–6 generalised); [`Uniaxial`] makes every
+//!   [`PairPotential`] one (axis = attitude · body `ẑ`), bit for bit;
+//! - [`SoftStickyDipole`] (the [`water`] module): the single-site SSD/E water of Fennell and
+//!   Gezelter (2004) in kJ/mol, Å, amu, ps, switched to zero at a 9 Å cut-off, with its inertia
+//!   tensor and rigorous bounds (minimum, reach of a level) for the terrace map;
 //! - [`reach`], [`virial`], [`quadrature`]: the reach of a level for any potential, second virial
 //!   coefficients of the smooth and terraced potentials, and the quadrature behind them.
 //!
@@ -59,11 +66,13 @@ mod placement;
 pub mod profile;
 pub mod quadrature;
 pub mod reach;
+pub mod rigid;
 mod rod;
 mod smoothing;
 mod solve;
 mod terrace;
 pub mod virial;
+pub mod water;
 
 pub use certify::{FreeFlight, TaylorModel};
 pub use error::PotentialError;
@@ -72,12 +81,14 @@ pub use lennard_jones::LennardJones;
 pub use pair::{Invariants, PairEval, PairGeometry, PairPotential, Partials};
 pub use placement::{Layout, Placement, StepEnergy};
 pub use profile::{Profile, Shell};
+pub use rigid::{RigidGeometry, RigidPairPotential, Uniaxial};
 pub use rod::LjRod;
 pub use smoothing::Smoothed;
 pub use terrace::{
     Bounds, DEFAULT_CORE_DEPTHS, DEFAULT_MINIMUM_TOLERANCE, LevelSet, MAX_LEVELS, NearMinimum,
     Steps, TerraceMap, TerraceOptions,
 };
+pub use water::{SoftStickyDipole, SsdParameters};
 
 /// The README's example, compiled and run as a doctest so it cannot go stale.
 #[cfg(doctest)]
