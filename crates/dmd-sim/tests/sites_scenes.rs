@@ -218,20 +218,3 @@ fn aligned_starts_trajectories_and_molecular_units() {
     assert_eq!(s.units, "molecular");
     assert!((s.temperature - 300.0).abs() < 40.0, "{}", s.temperature);
 }
-
-#[test]
-fn checkpoints_of_site_molecules_are_refused_before_the_run() {
-    use dmd_sim::checkpoint::Every;
-    use dmd_sim::run::{RunOptions, run_scene_with};
-    let (scene, base) = shipped("hard-dumbbells.toml", &["output="]);
-    let options = RunOptions {
-        checkpoint_every: Some(Every::Events(1000)),
-        ..RunOptions::default()
-    };
-    let e = run_scene_with(&scene, &base, None, &mut Quiet, &options).unwrap_err();
-    assert!(
-        e.to_string()
-            .starts_with("scene key `checkpoint`: checkpoints are not available for rigid site"),
-        "{e}"
-    );
-}

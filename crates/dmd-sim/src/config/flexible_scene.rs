@@ -335,12 +335,16 @@ fn overlap(
 /// The [`Flexible`] model of a scene: random starts without overlaps, RATTLE and search
 /// settings.
 ///
+/// For a `resumed` run the conformations drawn here are placeholders that the checkpoint's
+/// state replaces: they are drawn once, without the overlap search.
+///
 /// # Errors
 /// [`SceneError::Invalid`]: a start that stays overlapping after [`ORIENTATION_TRIES`] draws.
 pub fn model(
     scene: &Scene,
     config: &Configuration,
     plan: FlexiblePlan,
+    resumed: bool,
 ) -> Result<Flexible, SceneError> {
     let n = config.positions.len();
     let kt = scene.init.temperature;
@@ -360,7 +364,8 @@ pub fn model(
                 ^ attempt.wrapping_mul(0xc2b2_ae3d_27d4_eb4f);
             let (mut q, mut u) = random_internal(&plan.types, &[config.species[i]], kt, seed);
             let (q, u) = (q.remove(0), u.remove(0));
-            let hit = (0..i).any(|j| {
+            let others = if resumed { 0 } else { i };
+            let hit = (0..others).any(|j| {
                 overlap(
                     &plan,
                     config.lengths,

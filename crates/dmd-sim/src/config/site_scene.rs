@@ -632,9 +632,18 @@ fn overlap(
 /// The [`Sites`] model of a scene: attitudes (random without overlaps, or aligned), angular
 /// velocities from equipartition at the scene temperature, search settings and impulse rule.
 ///
+/// For a `resumed` run the attitudes and angular velocities drawn here are placeholders that
+/// the checkpoint's state replaces: they are drawn once, without the overlap search (the
+/// checkpoint's positions are not the start's).
+///
 /// # Errors
 /// [`SceneError::Invalid`]: molecules that overlap at the start, named.
-pub fn model(scene: &Scene, config: &Configuration, plan: SitesPlan) -> Result<Sites, SceneError> {
+pub fn model(
+    scene: &Scene,
+    config: &Configuration,
+    plan: SitesPlan,
+    resumed: bool,
+) -> Result<Sites, SceneError> {
     let n = config.positions.len();
     let kt = scene.init.temperature;
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(scene.seed ^ 0x517e_5000_0000_000a);
@@ -654,7 +663,7 @@ pub fn model(scene: &Scene, config: &Configuration, plan: SitesPlan) -> Result<S
         _ => "box.density",
     };
     for i in 0..n {
-        let tries = if aligned.is_some() {
+        let tries = if aligned.is_some() || resumed {
             1
         } else {
             ORIENTATION_TRIES
@@ -664,7 +673,8 @@ pub fn model(scene: &Scene, config: &Configuration, plan: SitesPlan) -> Result<S
         for _ in 0..tries {
             let q = aligned.unwrap_or_else(|| random_quaternion(&mut rng));
             let r = DMat3::from_quat(q);
-            let hit = (0..i).find_map(|j| {
+            let others = if resumed { 0 } else { i };
+            let hit = (0..others).find_map(|j| {
                 overlap(
                     &plan,
                     config.lengths,

@@ -32,10 +32,10 @@ pub enum RunError {
     #[error("halted after writing a checkpoint, as asked")]
     Halted,
     /// Stopped by a signal ([`crate::driver::interrupt`]) at a re-basing, after saving this checkpoint
-    /// (none where the state cannot be saved: site molecules).
+    /// (none for a run without an output folder).
     #[error("stopped by a signal{}", match .checkpoint {
         Some(p) => format!(" after saving {}", p.display()),
-        None => " (this run's state cannot be saved)".to_owned(),
+        None => " (no output folder: nothing saved)".to_owned(),
     })]
     Interrupted {
         /// The checkpoint written.

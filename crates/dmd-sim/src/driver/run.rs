@@ -309,8 +309,6 @@ pub fn run_scene_with(
         settings.debug_check_events = 0;
     }
     let ctx = Context {
-        // Site molecules cannot be saved yet (checkpoints are refused for them below).
-        saveable: !matches!(plan, Plan::Sites(_) | Plan::Flexible(_)),
         scene,
         config: &config,
         velocities: &velocities,
@@ -342,6 +340,7 @@ pub fn run_scene_with(
         summary.model = "stepped (fault injection)".to_owned();
         return Ok(summary);
     }
+    let resumed = options.resume.is_some();
     match plan {
         Plan::Spheres(potentials) => {
             let particles: Vec<Particle> = scene
@@ -389,28 +388,11 @@ pub fn run_scene_with(
             ctx.go_any_queue(model, reporter)
         }
         Plan::Sites(plan) => {
-            // Issue 10: their state cannot be restored from a checkpoint yet.
-            if options.checkpoint_every.is_some() {
-                return Err(SceneError::invalid(
-                    "checkpoint",
-                    "checkpoints are not available for rigid site molecules (their attitudes \
-                     and site-pair levels are not saved yet): run without --checkpoint-every",
-                )
-                .into());
-            }
-            let model = crate::config::site_scene::model(scene, &config, plan)?;
+            let model = crate::config::site_scene::model(scene, &config, plan, resumed)?;
             ctx.go_any_queue(model, reporter)
         }
         Plan::Flexible(plan) => {
-            if options.checkpoint_every.is_some() {
-                return Err(SceneError::invalid(
-                    "checkpoint",
-                    "checkpoints are not available for semi-flexible molecules (their internal \
-                     states and site-pair levels are not saved): run without --checkpoint-every",
-                )
-                .into());
-            }
-            let model = crate::config::flexible_scene::model(scene, &config, plan)?;
+            let model = crate::config::flexible_scene::model(scene, &config, plan, resumed)?;
             ctx.go_any_queue(model, reporter)
         }
     }
@@ -456,8 +438,6 @@ fn terraced_model<P: potential::PairPotential>(
 }
 
 struct Context<'a> {
-    /// Whether the model's state can be saved in a checkpoint.
-    saveable: bool,
     scene: &'a Scene,
     config: &'a Configuration,
     velocities: &'a [DVec3],
@@ -519,7 +499,7 @@ impl Context<'_> {
             .map(|(_, c)| c.source.clone())
             .or_else(|| self.options.source.clone());
         let mut run = Driver {
-            saver: Saver::new(every, self.out.filter(|_| self.saveable), source),
+            saver: Saver::new(every, self.out, source),
             record: resume.map(|(_, c)| c.record.clone()).unwrap_or_default(),
             chain: resume.and_then(|(_, c)| c.chain.clone()).or_else(|| {
                 scene

@@ -12,6 +12,7 @@ pub mod model;
 pub mod neighbour;
 pub mod pair_state;
 pub mod potential;
+pub mod saved;
 pub mod schedule;
 pub mod simulation;
 pub mod sum;

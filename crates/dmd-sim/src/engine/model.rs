@@ -13,7 +13,7 @@
 //! events, so reaching radius `R` solves `v² t² + 2 b t + (r² − R²) = 0`, `b = r·v`. Each root is
 //! taken in the form without cancellation (`c / (−b + √D)` entering, `−c / (b + √D)` leaving
 //! while receding), as in `root_search::sphere_window`, which the tests use as the reference.
-//! A rigid-body model (issue 7) implements the same trait with root searches bracketed by the
+//! A rigid-body model implements the same trait with root searches bracketed by the
 //! reach sphere, and may return virtual events.
 
 use collide::{Outcome, Particle, spheres};

@@ -14,6 +14,8 @@
 
 use std::collections::HashMap;
 
+use crate::engine::saved::StateReader;
+
 /// Levels of all interacting pairs.
 #[derive(Clone, Debug)]
 pub struct PairStates {
@@ -198,6 +200,57 @@ impl SiteLevels {
     /// No molecule pair stored.
     pub fn is_empty(&self) -> bool {
         self.map.is_empty()
+    }
+
+    /// Appends every stored pair to a saved state, in the order of the pairs (so that equal
+    /// states give equal numbers): the count, then per pair `lo, hi, n`, and the `n` levels.
+    pub fn write_numbers(&self, out: &mut Vec<f64>) {
+        let mut keys: Vec<&(u32, u32)> = self.map.keys().collect();
+        keys.sort_unstable();
+        out.push(keys.len() as f64);
+        for k in keys {
+            let l = &self.map[k];
+            out.extend_from_slice(&[f64::from(k.0), f64::from(k.1), l.len() as f64]);
+            out.extend(l.iter().map(|&v| f64::from(v)));
+        }
+    }
+
+    /// Reads what [`write_numbers`](Self::write_numbers) wrote, for `n` molecules whose pair
+    /// `(lo, hi)` has `sizes(lo, hi)` site pairs and whose site pair `k` has `levels(lo, hi, k)`
+    /// levels.
+    ///
+    /// # Errors
+    /// A pair or level that does not fit the scene.
+    pub fn read_numbers(
+        r: &mut StateReader,
+        n: u32,
+        sizes: impl Fn(u32, u32) -> usize,
+        levels: impl Fn(u32, u32, usize) -> usize,
+    ) -> Result<Self, String> {
+        let pairs = r.index("the number of stored site-pair levels", u64::from(u32::MAX))?;
+        let mut map = HashMap::new();
+        for _ in 0..pairs {
+            let lo = r.index("a molecule of a stored pair", u64::from(n))? as u32;
+            let hi = r.index("a molecule of a stored pair", u64::from(n))? as u32;
+            if lo >= hi {
+                return Err(format!("the stored pair ({lo}, {hi}) is not ordered"));
+            }
+            let len = r.index("a pair's number of site pairs", 1 << 32)? as usize;
+            if len != sizes(lo, hi) {
+                return Err(format!(
+                    "the pair ({lo}, {hi}) has {} site pairs, the state gives {len}",
+                    sizes(lo, hi)
+                ));
+            }
+            let mut l = Vec::with_capacity(len);
+            for k in 0..len {
+                l.push(r.index("a site-pair level", levels(lo, hi, k) as u64)? as u16);
+            }
+            if map.insert((lo, hi), l.into_boxed_slice()).is_some() {
+                return Err(format!("the pair ({lo}, {hi}) is stored twice"));
+            }
+        }
+        Ok(SiteLevels { map })
     }
 }
 

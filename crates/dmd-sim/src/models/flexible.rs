@@ -78,7 +78,7 @@ pub mod rattle;
 
 use collide::{Bond, CollideError, ConstraintSolver, Molecule, Outcome};
 use glam::{DQuat, DVec3};
-use rand::{RngExt, SeedableRng};
+use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;
 use root_search::{Adaptive, Crossing, Grid, Method, SearchError};
@@ -87,7 +87,10 @@ use crate::engine::event::{Boundary, Kind};
 use crate::engine::model::{Executed, Pair, PairClass, PairModel, PairSetupError, Report};
 use crate::engine::pair_state::{SavedSearches, SiteLevels};
 use crate::engine::potential::Potentials;
-use crate::models::search::{SearchMethod, SearchSettings, SearchStats, bracket, check_settings};
+use crate::engine::saved::{StateReader, push_count};
+use crate::models::search::{
+    SearchMethod, SearchSettings, SearchStats, bracket, check_settings, jitter_factor, mix,
+};
 use crate::models::site_pairs::{Band, SITE_OVERLAP_TOLERANCE, SiteAtom, SiteSearch};
 
 pub use rattle::{Constraints, RattleError, Trajectory};
@@ -508,7 +511,8 @@ pub struct Flexible {
     settings: SearchSettings,
     rattle: RattleSettings,
     solver: ConstraintSolver,
-    rng: Xoshiro256PlusPlus,
+    /// The key of the search steps' jitter ([`jitter_factor`]).
+    jitter_key: u64,
     stats: SearchStats,
     flex: FlexStats,
     /// Kinetic energy the integration brought in at events, not yet taken by the loop.
@@ -654,7 +658,7 @@ impl Flexible {
             settings,
             rattle,
             solver: ConstraintSolver::new(),
-            rng: Xoshiro256PlusPlus::seed_from_u64(seed),
+            jitter_key: mix(seed ^ 0xf1e8_0000_0000_0013),
             stats: SearchStats::default(),
             flex: FlexStats::default(),
             kinetic_error: 0.0,
@@ -814,6 +818,8 @@ impl Flexible {
         {
             let (traj_i, traj_j) = two(&mut self.trajectories, i as usize, j as usize);
             let mut geo = Geometry {
+                i,
+                j,
                 traj_i,
                 traj_j,
                 ci: &self.constraints[ti],
@@ -825,7 +831,7 @@ impl Flexible {
             let mut search = Searcher {
                 settings: &self.settings,
                 stats: &mut self.stats,
-                rng: &mut self.rng,
+                key: self.jitter_key,
             };
             for k in 0..sites.len() {
                 let due = match sites[k] {
@@ -840,6 +846,7 @@ impl Flexible {
                 let lv = self.potentials.all()[sp.potential as usize].levels()[levels[k] as usize];
                 sites[k] = search.site(
                     &mut geo,
+                    k as u32,
                     (sp.a as usize, sp.b as usize),
                     Band::of(&lv),
                     sites[k],
@@ -1002,6 +1009,9 @@ pub fn random_internal(
 
 /// The two molecules of a pair and their relative centre motion: what the indicators need.
 struct Geometry<'a> {
+    /// The pair (it keys the jitter).
+    i: u32,
+    j: u32,
     traj_i: &'a mut Trajectory,
     traj_j: &'a mut Trajectory,
     ci: &'a Constraints,
@@ -1034,7 +1044,8 @@ impl Geometry<'_> {
 struct Searcher<'a> {
     settings: &'a SearchSettings,
     stats: &'a mut SearchStats,
-    rng: &'a mut Xoshiro256PlusPlus,
+    /// The key of the search steps' jitter ([`jitter_factor`]).
+    key: u64,
 }
 
 impl Searcher<'_> {
@@ -1043,6 +1054,7 @@ impl Searcher<'_> {
     fn site(
         &mut self,
         geo: &mut Geometry,
+        k: u32,
         atoms: (usize, usize),
         band: Band,
         from: SiteSearch,
@@ -1061,11 +1073,8 @@ impl Searcher<'_> {
                 self.stats.off_terrace += 1;
             }
         }
-        let jitter = if self.settings.jitter > 0.0 {
-            1.0 - self.settings.jitter * self.rng.random::<f64>()
-        } else {
-            1.0
-        };
+        let key = mix(self.key ^ u64::from(k));
+        let jitter = jitter_factor(self.settings.jitter, key, geo.i, geo.j, t0);
         let step = self.settings.max_step * jitter;
         let horizon = if until == f64::INFINITY && end == f64::INFINITY {
             t0 + 1e4 * self.settings.max_step
@@ -1369,12 +1378,61 @@ impl PairModel for Flexible {
         (0, e)
     }
 
-    fn set_extra_state(&mut self, _state: &[f64]) -> Result<(), String> {
-        Err(
-            "semi-flexible molecules cannot be restored from a saved state (checkpoints and HMC \
-             rollbacks do not carry their site-pair levels and internal states)"
-                .to_owned(),
-        )
+    fn extra_state(&self) -> Vec<f64> {
+        let mut x = Vec::new();
+        for t in &self.trajectories {
+            t.write_numbers(&mut x);
+        }
+        self.levels.write_numbers(&mut x);
+        self.stats.write_numbers(&mut x);
+        let f = &self.flex;
+        push_count(&mut x, f.steps);
+        push_count(&mut x, f.restarts);
+        push_count(&mut x, f.failures);
+        x.extend_from_slice(&[
+            f.interpolated_bond_error,
+            f.projection_energy,
+            self.kinetic_error,
+        ]);
+        x
+    }
+
+    fn set_extra_state(&mut self, state: &[f64]) -> Result<(), String> {
+        let mut r = StateReader::new(state);
+        let mut trajectories = Vec::with_capacity(self.trajectories.len());
+        for (i, &ty) in self.body_type.iter().enumerate() {
+            let atoms = self.types[ty as usize].masses.len();
+            trajectories.push(
+                Trajectory::read_numbers(&mut r, self.rattle.step, atoms)
+                    .map_err(|e| format!("molecule {i}: {e}"))?,
+            );
+        }
+        let n = self.body_type.len() as u32;
+        let levels = SiteLevels::read_numbers(
+            &mut r,
+            n,
+            |i, j| self.type_pairs[self.type_pair(i, j)].pairs.len(),
+            |i, j, k| {
+                let sp = self.type_pairs[self.type_pair(i, j)].pairs[k];
+                self.potentials.all()[sp.potential as usize].levels().len()
+            },
+        )?;
+        let stats = SearchStats::read_numbers(&mut r)?;
+        let flex = FlexStats {
+            steps: r.count("rattle.steps")?,
+            restarts: r.count("rattle.restarts")?,
+            failures: r.count("rattle.failures")?,
+            interpolated_bond_error: r.real("rattle.interpolated_bond_error")?,
+            projection_energy: r.real("rattle.projection_energy")?,
+        };
+        let kinetic_error = r.real("the kinetic energy error")?;
+        r.finish()?;
+        self.trajectories = trajectories;
+        self.levels = levels;
+        self.stats = stats;
+        self.flex = flex;
+        self.kinetic_error = kinetic_error;
+        Ok(())
     }
 
     fn pair_energy(&self, i: u32, j: u32, _si: u32, _sj: u32) -> f64 {

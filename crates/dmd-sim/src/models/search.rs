@@ -6,6 +6,7 @@ use glam::DVec3;
 use root_search::{Adaptive, Grid, SearchError};
 
 use crate::engine::model::Report;
+use crate::engine::saved::{StateReader, push_count};
 
 /// How the event times of a pair are searched.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -173,6 +174,25 @@ impl SearchStats {
         }
     }
 
+    /// Appends the counters to a model's saved state.
+    pub fn write_numbers(&self, out: &mut Vec<f64>) {
+        for c in self.counts() {
+            push_count(out, c);
+        }
+    }
+
+    /// Reads what [`write_numbers`](Self::write_numbers) wrote.
+    ///
+    /// # Errors
+    /// A counter that is not a count.
+    pub fn read_numbers(r: &mut StateReader) -> Result<SearchStats, String> {
+        let mut c = [0u64; 12];
+        for x in &mut c {
+            *x = r.count("a search counter")?;
+        }
+        Ok(SearchStats::from_counts(c))
+    }
+
     /// Adds the counters to a model's report.
     pub fn report_into(&self, report: &mut Report) {
         for (name, c) in Self::NAMES.iter().zip(self.counts()) {
@@ -252,4 +272,27 @@ pub fn bracket(dr: DVec3, dv: DVec3, radius2: f64) -> Option<(f64, f64)> {
         };
         Some((0.0, exit))
     }
+}
+
+/// The factor `1 − jitter·u` by which one search call shortens its step, `u ∈ [0, 1)` a hash
+/// of `key`, the pair `(i, j)` and the time `t0` the call starts from. A pure function, never
+/// a generator's history: a prediction made again from the same state (a saved state
+/// restored) is the same prediction, so checkpoints and HMC rollbacks stay bit for bit.
+#[inline]
+pub fn jitter_factor(jitter: f64, key: u64, i: u32, j: u32, t0: f64) -> f64 {
+    if jitter > 0.0 {
+        let h = mix(mix(key ^ (u64::from(i) << 32 | u64::from(j))) ^ t0.to_bits());
+        1.0 - jitter * ((h >> 11) as f64 * (1.0 / 9_007_199_254_740_992.0))
+    } else {
+        1.0
+    }
+}
+
+/// SplitMix64's finaliser: a well-mixed 64-bit hash.
+#[inline]
+pub fn mix(mut z: u64) -> u64 {
+    z = z.wrapping_add(0x9e37_79b9_7f4a_7c15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^ (z >> 31)
 }

@@ -66,7 +66,7 @@ use collide::{
     Outcome, RigidBody, Velocity, contact,
 };
 use glam::{DMat3, DQuat, DVec3};
-use rand::{RngExt, SeedableRng};
+use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;
 use rigid_free::{FreeMotion, Moments};
@@ -76,7 +76,10 @@ use crate::engine::event::{Boundary, Kind};
 use crate::engine::model::{Executed, Pair, PairClass, PairModel, PairSetupError, Report};
 use crate::engine::pair_state::{SavedSearches, SiteLevels};
 use crate::engine::potential::Potentials;
-use crate::models::search::{SearchMethod, SearchSettings, SearchStats, bracket, check_settings};
+use crate::engine::saved::StateReader;
+use crate::models::search::{
+    SearchMethod, SearchSettings, SearchStats, bracket, check_settings, jitter_factor, mix,
+};
 use crate::models::site_pairs::{Band, SITE_OVERLAP_TOLERANCE, SiteAtom, SiteSearch};
 
 /// Moments within this fraction of the largest are made equal (and a smallest moment below it
@@ -565,7 +568,8 @@ pub struct Sites {
     rule: ImpulseRule,
     cross: Option<CrossCheck>,
     solver: ConstraintSolver,
-    rng: Xoshiro256PlusPlus,
+    /// The key of the search steps' jitter ([`jitter_factor`]).
+    jitter_key: u64,
     stats: SearchStats,
     reach: f64,
 }
@@ -668,7 +672,7 @@ impl Sites {
             rule,
             cross: None,
             solver: ConstraintSolver::new(),
-            rng: Xoshiro256PlusPlus::seed_from_u64(seed),
+            jitter_key: mix(seed ^ 0x5173_e500_0000_0011),
             stats: SearchStats::default(),
             reach,
         })
@@ -843,6 +847,9 @@ impl Sites {
             let arm_i = self.types[ti].sites[sp.a as usize];
             let arm_j = self.types[tj].sites[sp.b as usize];
             let geo = SiteGeometry {
+                i,
+                j,
+                k: k as u32,
                 ri,
                 rj,
                 arm_i,
@@ -900,11 +907,8 @@ impl Sites {
                 self.stats.off_terrace += 1;
             }
         }
-        let jitter = if self.settings.jitter > 0.0 {
-            1.0 - self.settings.jitter * self.rng.random::<f64>()
-        } else {
-            1.0
-        };
+        let key = mix(self.jitter_key ^ u64::from(geo.k));
+        let jitter = jitter_factor(self.settings.jitter, key, geo.i, geo.j, t0);
         let step = self.settings.max_step * jitter;
         // A bracket without end (no relative motion: only rotation changes d) needs a window.
         let horizon = if until == f64::INFINITY && end == f64::INFINITY {
@@ -1090,6 +1094,10 @@ impl PoseCache {
 
 /// What one site pair's indicator needs.
 struct SiteGeometry {
+    /// The pair and the index of the site pair in its table (they key the jitter).
+    i: u32,
+    j: u32,
+    k: u32,
     ri: Rotation,
     rj: Rotation,
     arm_i: DVec3,
@@ -1349,12 +1357,53 @@ impl PairModel for Sites {
         (0, e)
     }
 
-    fn set_extra_state(&mut self, _state: &[f64]) -> Result<(), String> {
-        Err(
-            "site molecules cannot be restored from a saved state (checkpoints and HMC \
-             rollbacks do not carry their site-pair levels and attitudes yet)"
-                .to_owned(),
-        )
+    fn extra_state(&self) -> Vec<f64> {
+        // Each molecule's free motion as the state it was built from (exactly: rebuilding it
+        // from these numbers gives the same motion bit for bit), then the site-pair levels and
+        // the search counters.
+        let mut x = Vec::with_capacity(13 * self.rotations.len() + 1 + 24);
+        for r in &self.rotations {
+            let p = r.motion.initial_pose();
+            x.extend_from_slice(&p.orientation.to_cols_array());
+            x.extend_from_slice(&p.omega.to_array());
+            x.push(r.t);
+        }
+        self.levels.write_numbers(&mut x);
+        self.stats.write_numbers(&mut x);
+        x
+    }
+
+    fn set_extra_state(&mut self, state: &[f64]) -> Result<(), String> {
+        let mut r = StateReader::new(state);
+        let mut rotations = Vec::with_capacity(self.rotations.len());
+        for (i, &ty) in self.body_type.iter().enumerate() {
+            let orientation = r.mat3("a molecule's orientation")?;
+            let omega = r.vec3("a molecule's angular velocity")?;
+            let t = r.real("a molecule's clock")?;
+            let motion = FreeMotion::new(
+                &self.types[ty as usize].moments,
+                orientation.transpose(),
+                omega,
+            )
+            .map_err(|e| format!("molecule {i} cannot be restored: {e}"))?;
+            rotations.push(Rotation { motion, t });
+        }
+        let n = self.body_type.len() as u32;
+        let levels = SiteLevels::read_numbers(
+            &mut r,
+            n,
+            |i, j| self.type_pairs[self.type_pair(i, j)].pairs.len(),
+            |i, j, k| {
+                let sp = self.type_pairs[self.type_pair(i, j)].pairs[k];
+                self.potentials.all()[sp.potential as usize].levels().len()
+            },
+        )?;
+        let stats = SearchStats::read_numbers(&mut r)?;
+        r.finish()?;
+        self.rotations = rotations;
+        self.levels = levels;
+        self.stats = stats;
+        Ok(())
     }
 
     fn pair_energy(&self, i: u32, j: u32, _si: u32, _sj: u32) -> f64 {

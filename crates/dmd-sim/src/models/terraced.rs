@@ -52,7 +52,9 @@ use root_search::{Adaptive, Crossing, Grid, Method, SearchError, SearchState};
 use crate::engine::event::{Boundary, Kind};
 use crate::engine::model::{Executed, Pair, PairClass, PairModel, PairSetupError, Report};
 use crate::engine::pair_state::{PairStates, SavedSearches};
-use crate::models::search::{SearchMethod, SearchSettings, SearchStats, bracket};
+use crate::models::search::{
+    SearchMethod, SearchSettings, SearchStats, bracket, jitter_factor, mix,
+};
 
 /// One rod's free rotation since its last change at time `t`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -681,15 +683,7 @@ impl<P: PairPotential> Terraced<P> {
             }
             band.indicator(u, du)
         };
-        // The jitter is a pure function of the pair and the time the call starts from, never
-        // of a generator's history: a prediction made again from the same state (a saved state
-        // restored, 009) is the same prediction.
-        let jitter = if self.settings.jitter > 0.0 {
-            let h = mix(mix(self.jitter_key ^ (u64::from(i) << 32 | u64::from(j))) ^ t0.to_bits());
-            1.0 - self.settings.jitter * ((h >> 11) as f64 * (1.0 / 9_007_199_254_740_992.0))
-        } else {
-            1.0
-        };
+        let jitter = jitter_factor(self.settings.jitter, self.jitter_key, i, j, t0);
         // The step follows the speed of U: at most `max_change` of the terrace's width per
         // step at the speed of the call's first sample (never below 1 % of the maximum step).
         let mut step = self.settings.max_step * jitter;
@@ -1237,14 +1231,6 @@ const ROD_NUMBERS: usize = 11;
 
 /// Numbers of the search counters in [`PairModel::extra_state`] (two per counter).
 const STATS_NUMBERS: usize = 24;
-
-/// SplitMix64's finaliser: a well-mixed 64-bit hash.
-fn mix(mut z: u64) -> u64 {
-    z = z.wrapping_add(0x9e37_79b9_7f4a_7c15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    z ^ (z >> 31)
-}
 
 impl<P> Terraced<P> {
     /// Species of every body.

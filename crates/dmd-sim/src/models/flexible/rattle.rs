@@ -40,6 +40,8 @@
 use collide::Bond;
 use glam::DVec3;
 
+use crate::engine::saved::StateReader;
+
 /// Newton iterations of the position stage before it is declared not converged (it converges
 /// quadratically: a handful suffice unless the step is far too long).
 pub const MAX_NEWTON: usize = 50;
@@ -412,6 +414,58 @@ impl Trajectory {
             u: u.to_vec(),
             failed: None,
         }
+    }
+
+    /// Appends the trajectory to a saved state: `t0`, the index of the first step held, the
+    /// number of steps held, whether a step failed, the state at the last change and the
+    /// steps held. Restoring the steps rather than computing them again keeps a resumed run's
+    /// step counts equal to an uninterrupted run's.
+    pub fn write_numbers(&self, out: &mut Vec<f64>) {
+        out.extend_from_slice(&[
+            self.t0,
+            self.first as f64,
+            self.held_steps() as f64,
+            f64::from(u8::from(self.failed.is_some())),
+        ]);
+        for v in [&self.q0, &self.u0, &self.q, &self.u] {
+            out.extend(v.iter().flat_map(|x| x.to_array()));
+        }
+    }
+
+    /// Reads what [`write_numbers`](Self::write_numbers) wrote, for a molecule of `n` atoms
+    /// moved with RATTLE step `h`.
+    ///
+    /// # Errors
+    /// Numbers that do not fit, or a trajectory whose step had failed.
+    pub fn read_numbers(r: &mut StateReader, h: f64, n: usize) -> Result<Self, String> {
+        let t0 = r.real("a trajectory's start")?;
+        let first = r.index("a trajectory's first step", 1 << 52)? as usize;
+        let held = r.index("a trajectory's steps held", 1 << 32)? as usize;
+        if r.index("a trajectory's failure flag", 2)? == 1 {
+            return Err("a RATTLE step of the saved state had failed".to_owned());
+        }
+        if held == 0 {
+            return Err("a trajectory holds no step".to_owned());
+        }
+        let mut vecs = |count: usize, what: &str| -> Result<Vec<DVec3>, String> {
+            let x = r.take(3 * count, what)?;
+            Ok(x.chunks_exact(3).map(DVec3::from_slice).collect())
+        };
+        let q0 = vecs(n, "a molecule's positions")?;
+        let u0 = vecs(n, "a molecule's velocities")?;
+        let q = vecs(held * n, "a trajectory's positions")?;
+        let u = vecs(held * n, "a trajectory's velocities")?;
+        Ok(Trajectory {
+            t0,
+            h,
+            n,
+            q0,
+            u0,
+            first,
+            q,
+            u,
+            failed: None,
+        })
     }
 
     /// Starts afresh from `(q, u)` at `t0` (the molecule changed).
