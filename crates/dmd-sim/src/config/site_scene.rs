@@ -348,14 +348,6 @@ pub(crate) fn check(scene: &Scene) -> Result<(), SceneError> {
             }
         }
     }
-    // What site molecules do not support (yet).
-    if scene.hmc.is_some() {
-        return Err(SceneError::invalid(
-            "hmc",
-            "not available for rigid site molecules: their attitudes and site-pair levels \
-             cannot be restored after a rejected segment yet",
-        ));
-    }
     let init = &scene.init;
     match (init.orientations, init.axis) {
         (Orientations::File, _) => {

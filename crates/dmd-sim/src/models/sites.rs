@@ -1316,9 +1316,8 @@ impl PairModel for Sites {
 
     // Site molecules store a level per *site* pair in their own map, not one level per
     // molecule pair: the loop's per-pair level is always 0 for them. HMC's ΔH reads the energy
-    // judged from the site distances below; the saved state of checkpoints and of HMC's
-    // rollback cannot carry the site levels yet, so restoring one is refused
-    // (`set_extra_state`) rather than silently losing them.
+    // judged from the site distances below; checkpoints and HMC's rollback carry the site
+    // levels in the model's own saved state (`extra_state`).
     fn level(&self, _i: u32, _j: u32) -> u16 {
         0
     }
@@ -1537,6 +1536,42 @@ impl PairModel for Sites {
         let mut r = Report::default();
         self.stats.report_into(&mut r);
         r
+    }
+
+    fn draw_rotations(&mut self, now: f64, temperature: f64, rng: &mut Xoshiro256PlusPlus) {
+        // HMC's momentum refresh: each molecule restarts at `now` from its present attitude
+        // with a body-frame angular velocity drawn from equipartition.
+        for (r, &ty) in self.rotations.iter_mut().zip(&self.body_type) {
+            let t = &self.types[ty as usize];
+            let p = r.motion.pose(now - r.t);
+            let q = DQuat::from_mat3(&p.orientation).normalize();
+            let w = draw_body_omega(t, temperature, rng);
+            if let Ok(motion) = FreeMotion::from_quat(&t.moments, q, w) {
+                *r = Rotation { motion, t: now };
+            }
+        }
+    }
+
+    fn reverse_rotations(&mut self) {
+        // HMC reverses at a re-basing (present time 0), where every molecule is anchored: the
+        // reversed motion starts from the same attitude with −ω and retraces the old one.
+        for (r, &ty) in self.rotations.iter_mut().zip(&self.body_type) {
+            let moments = &self.types[ty as usize].moments;
+            let p = r.motion.pose(-r.t);
+            let reversed = if r.t == 0.0 {
+                let p0 = r.motion.initial_pose();
+                FreeMotion::new(moments, p0.orientation.transpose(), -p0.omega)
+            } else {
+                FreeMotion::from_quat(
+                    moments,
+                    DQuat::from_mat3(&p.orientation).normalize(),
+                    -p.omega,
+                )
+            };
+            if let Ok(motion) = reversed {
+                *r = Rotation { motion, t: 0.0 };
+            }
+        }
     }
 
     fn scale_rotations(&mut self, now: f64, factor: f64) {
@@ -2002,5 +2037,101 @@ mod pair_tests {
         for time in [0.1, 1.0, 3.0, 30.0] {
             assert!((l(time) - l(0.0)).length() < 1e-12, "{time}");
         }
+    }
+
+    /// Two asymmetric tops with a stored site-pair level, for the saved-state tests.
+    fn tops() -> Sites {
+        let t = MoleculeType::new(&[
+            atom(0.0, 0.0, 0.0, 3.0),
+            atom(0.6, 0.2, 0.0, 1.0),
+            atom(-0.3, 0.5, 0.25, 2.0),
+        ])
+        .unwrap();
+        let pot = Potentials::from_tables(
+            1,
+            &[((0, 0), vec![[0.5, f64::INFINITY], [1.0, -1.0], [1.4, -0.5]])],
+        );
+        let mut m = Sites::new(
+            vec![t],
+            pot,
+            &[0, 0],
+            &[DQuat::from_rotation_y(0.3), DQuat::from_rotation_x(-1.1)],
+            &[DVec3::new(0.3, -1.0, 2.0), DVec3::new(-0.7, 0.2, 0.4)],
+            0.0,
+            SearchSettings::paper(0.02),
+            ImpulseRule::ContactPoint,
+            1,
+        )
+        .unwrap();
+        m.levels.set(0, 1, 2, 1, (3, 3), 2);
+        m.stats.searches = 7;
+        m
+    }
+
+    /// HMC's rejection: reversed at a re-basing, each molecule retraces its free motion.
+    #[test]
+    fn reversed_rotations_retrace_the_free_motion() {
+        let mut m = tops();
+        let start: Vec<_> = (0..2).map(|i| m.pose(i, 0.0)).collect();
+        let t = 2.7;
+        m.rebase(t);
+        m.reverse_rotations();
+        for (i, (o0, w0)) in start.iter().enumerate() {
+            let (o, w) = m.pose(i as u32, t);
+            assert!(
+                (o - *o0).abs_diff_eq(DMat3::ZERO, 1e-12),
+                "{i}: {o} vs {o0}"
+            );
+            assert!((w + *w0).length() < 1e-12, "{i}: {w} vs {w0}");
+        }
+    }
+
+    /// The saved state restores the free motions bit for bit, the site levels and counters;
+    /// a state of another scene is refused with a reason.
+    #[test]
+    fn saved_state_restores_bit_for_bit_and_refuses_misfits() {
+        let mut m = tops();
+        m.rebase(1.3);
+        let saved = m.extra_state();
+        let poses: Vec<_> = (0..2).map(|i| m.pose(i, 0.9)).collect();
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(5);
+        m.draw_rotations(0.0, 2.0, &mut rng);
+        m.levels = SiteLevels::default();
+        m.stats = SearchStats::default();
+        assert_ne!(m.pose(0, 0.9), poses[0]);
+        m.set_extra_state(&saved).unwrap();
+        for (i, p) in poses.iter().enumerate() {
+            let (o, w) = m.pose(i as u32, 0.9);
+            assert_eq!(
+                o.to_cols_array().map(f64::to_bits),
+                p.0.to_cols_array().map(f64::to_bits)
+            );
+            assert_eq!(
+                w.to_array().map(f64::to_bits),
+                p.1.to_array().map(f64::to_bits)
+            );
+        }
+        assert_eq!(m.levels.get(0, 1, 2, 1, (3, 3)), 2);
+        assert_eq!(m.stats.searches, 7);
+        assert_eq!(m.extra_state(), saved);
+        // Too short, too long, a level beyond the table, a pair beyond the molecules.
+        assert!(m.set_extra_state(&saved[..saved.len() - 1]).is_err());
+        let mut long = saved.clone();
+        long.push(0.0);
+        assert!(m.set_extra_state(&long).unwrap_err().contains("numbers"));
+        let at = 2 * 13;
+        assert_eq!(saved[at], 1.0, "one stored pair");
+        let mut bad = saved.clone();
+        bad[at + 4 + 2 * 3 + 1] = 99.0;
+        assert!(
+            m.set_extra_state(&bad).unwrap_err().contains("level"),
+            "{bad:?}"
+        );
+        let mut bad = saved.clone();
+        bad[at + 2] = 2.0;
+        assert!(m.set_extra_state(&bad).unwrap_err().contains("molecule"));
+        let mut bad = saved;
+        bad[0] = f64::NAN;
+        assert!(m.set_extra_state(&bad).unwrap_err().contains("non-finite"));
     }
 }
