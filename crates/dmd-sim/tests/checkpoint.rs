@@ -2,12 +2,15 @@
 //! run that never stopped; damaged checkpoints are refused with a clear message and nothing
 //! is overwritten.
 
-use std::path::{Path, PathBuf};
+mod support;
+
+use std::path::PathBuf;
 use std::process::Command;
 
 use dmd_sim::checkpoint::{self, CODE_VERSION, Every, Problem, SceneSource};
-use dmd_sim::run::{Quiet, RunError, RunOptions, Summary, run_scene_with};
-use dmd_sim::scene::Scene;
+use dmd_sim::run::RunError;
+
+use support::{options, physics, resume, run_text as run, same_files};
 
 /// A square well with every output, re-based every 1500 events so that checkpoints fall
 /// mid-run, an Andersen thermostat in equilibration (its generator is saved too).
@@ -67,77 +70,7 @@ series = true
 "#;
 
 fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("dmd-ckpt-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn options(text: &str, overrides: &[String], every: Option<Every>, halt: bool) -> RunOptions {
-    RunOptions {
-        checkpoint_every: every,
-        source: Some(SceneSource {
-            text: text.to_owned(),
-            overrides: overrides.to_vec(),
-            base: PathBuf::from("."),
-            file: PathBuf::from("test.toml"),
-        }),
-        resume: None,
-        halt_after_checkpoint: halt,
-    }
-}
-
-fn run(
-    text: &str,
-    overrides: &[String],
-    out: &Path,
-    opts: &RunOptions,
-) -> Result<Summary, RunError> {
-    let scene = Scene::from_str_with(text, overrides).unwrap();
-    run_scene_with(&scene, Path::new("."), Some(out), &mut Quiet, opts)
-}
-
-fn resume(path: &Path) -> Summary {
-    let c = checkpoint::read(path).unwrap();
-    let scene = Scene::from_str_with(&c.source.text, &c.source.overrides).unwrap();
-    let out = path.parent().unwrap().to_owned();
-    let opts = RunOptions {
-        resume: Some((path.to_owned(), c)),
-        ..RunOptions::default()
-    };
-    run_scene_with(&scene, Path::new("."), Some(&out), &mut Quiet, &opts).unwrap()
-}
-
-/// The summary without what depends on the machine or on the scheduler's bookkeeping.
-fn physics(s: &Summary) -> serde_json::Value {
-    let mut v = serde_json::to_value(s).unwrap();
-    let o = v.as_object_mut().unwrap();
-    for k in [
-        "wall_seconds",
-        "cpu_seconds",
-        "events_per_second",
-        "events_per_cpu_second",
-        "pair_events_per_second",
-        "pair_events_per_cpu_second",
-        "queue_pushed",
-        "queue_stale_dropped",
-        "queue_stale_swept",
-        "requeued",
-    ] {
-        o.remove(k);
-    }
-    v
-}
-
-fn same_files(a: &Path, b: &Path, names: &[&str]) {
-    for n in names {
-        let x = std::fs::read(a.join(n)).unwrap_or_else(|e| panic!("{n}: {e}"));
-        let y = std::fs::read(b.join(n)).unwrap_or_else(|e| panic!("{n}: {e}"));
-        assert!(
-            x == y,
-            "{n} differs between the straight and the resumed run"
-        );
-    }
+    support::scratch(&format!("ckpt-{name}"))
 }
 
 #[test]

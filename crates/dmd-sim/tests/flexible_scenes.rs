@@ -2,35 +2,19 @@
 //! runs them: the shipped chains shortened (energy, bonds, anomalies, degrees of freedom), the
 //! defaults of `[rattle]`, a molecule the bonds hold rigid, and determinism.
 
+mod support;
+
 use std::path::Path;
 
 use dmd_sim::flexible_scene::{FlexiblePlan, STEP_BOND_FRACTION, rattle_settings};
 use dmd_sim::run::{Quiet, Summary, run_scene};
 use dmd_sim::scene::Scene;
 
-fn shipped(name: &str, overrides: &[&str]) -> (Scene, std::path::PathBuf) {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../scenes")
-        .join(name);
-    let o: Vec<String> = overrides.iter().map(|s| (*s).to_owned()).collect();
-    Scene::load(&path, &o).unwrap_or_else(|e| panic!("{name}: {e}"))
-}
-
-fn run(name: &str, overrides: &[&str], out: Option<&Path>) -> Summary {
-    let (scene, base) = shipped(name, overrides);
-    run_scene(&scene, &base, out, &mut Quiet).unwrap_or_else(|e| panic!("{name}: {e}"))
-}
+use support::{run_shipped as run, shipped};
 
 fn assert_healthy(s: &Summary, what: &str) {
     assert_eq!(s.model, "semi-flexible", "{what}");
-    assert!(
-        s.relative_energy_drift < 1e-10,
-        "{what}: drift {}",
-        s.relative_energy_drift
-    );
-    assert!(s.momentum_drift < 1e-11, "{what}: {}", s.momentum_drift);
-    assert_eq!(s.anomalies, 0, "{what}: {:?}", s.anomalies_by_kind);
-    assert_eq!(s.detected_misses, 0, "{what}: {:?}", s.search);
+    support::assert_conserved(s, what, 1e-10);
     let bond = s
         .bond_error
         .expect("semi-flexible runs report their bond error");

@@ -2,6 +2,8 @@
 //! three shipped scenes shortened, their molecules and tables against `sites::molecules`, the
 //! constrained rule, aligned starts, outputs, units and determinism.
 
+mod support;
+
 use std::path::Path;
 
 use dmd_sim::potential::Potentials;
@@ -10,18 +12,7 @@ use dmd_sim::scene::Scene;
 use dmd_sim::site_scene::SitesPlan;
 use dmd_sim::sites::molecules;
 
-fn shipped(name: &str, overrides: &[&str]) -> (Scene, std::path::PathBuf) {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../scenes")
-        .join(name);
-    let o: Vec<String> = overrides.iter().map(|s| (*s).to_owned()).collect();
-    Scene::load(&path, &o).unwrap_or_else(|e| panic!("{name}: {e}"))
-}
-
-fn run(name: &str, overrides: &[&str], out: Option<&Path>) -> Summary {
-    let (scene, base) = shipped(name, overrides);
-    run_scene(&scene, &base, out, &mut Quiet).unwrap_or_else(|e| panic!("{name}: {e}"))
-}
+use support::{run_shipped as run, shipped};
 
 /// The same step tables (the derived levels hold NaN for absent steps, so no `==`).
 fn assert_same_tables(a: &Potentials, b: &Potentials) {
@@ -36,14 +27,7 @@ fn assert_same_tables(a: &Potentials, b: &Potentials) {
 
 fn assert_healthy(s: &Summary, what: &str) {
     assert_eq!(s.model, "rigid-sites", "{what}");
-    assert!(
-        s.relative_energy_drift < 1e-11,
-        "{what}: drift {}",
-        s.relative_energy_drift
-    );
-    assert!(s.momentum_drift < 1e-11, "{what}: {}", s.momentum_drift);
-    assert_eq!(s.anomalies, 0, "{what}: {:?}", s.anomalies_by_kind);
-    assert_eq!(s.detected_misses, 0, "{what}: {:?}", s.search);
+    support::assert_conserved(s, what, 1e-11);
     assert!(s.reflections > 0, "{what}: no collision");
     assert!(s.virtual_events > 0, "{what}: no virtual event");
 }

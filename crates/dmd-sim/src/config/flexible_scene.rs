@@ -146,8 +146,9 @@ pub(crate) fn check_rest(scene: &Scene) -> Result<(), SceneError> {
     if scene.hmc.is_some() {
         return Err(SceneError::invalid(
             "hmc",
-            "not available for semi-flexible molecules: their internal states and site-pair \
-             levels cannot be restored after a rejected segment",
+            "not available for semi-flexible molecules: the measure their constrained dynamics \
+             samples carries the metric factor det Z, which the acceptance does not account for \
+             yet, and RATTLE between events is not exactly reversible",
         ));
     }
     match (scene.init.orientations, scene.init.axis) {

@@ -1067,10 +1067,14 @@ impl Searcher<'_> {
         };
         if let SiteSearch::Deferred { .. } = from {
             // A search that starts with its pair off the stored level has missed an event.
-            let (d2, _) = geo.distance2(atoms, t0);
+            let (d2, rate) = geo.distance2(atoms, t0);
             let tol = 1e-7 * band.scale;
             if d2 < band.lo - tol || d2 > band.hi + tol {
                 self.stats.off_terrace += 1;
+            }
+            if let Some(boundary) = band.leaving(d2, rate) {
+                self.stats.roots += 1;
+                return SiteSearch::Root(t0, boundary);
             }
         }
         let key = mix(self.key ^ u64::from(k));

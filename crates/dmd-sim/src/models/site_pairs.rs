@@ -54,6 +54,23 @@ impl Band {
         }
     }
 
+    /// The boundary a pair at `d²` with rate `ḋ²` is leaving through right now: on it (within
+    /// round-off, `1e-10` of the band's scale) and moving out. A fresh search never reports a
+    /// crossing at its start (right after an event the pair sits on the boundary it crossed,
+    /// moving in); a pair whose velocities were redrawn there (HMC's refresh at the end of an
+    /// equilibration stopped by an event count) may move out at once, and this says so.
+    #[inline]
+    pub fn leaving(&self, d2: f64, rate: f64) -> Option<Boundary> {
+        let margin = 1e-10 * self.scale;
+        if self.lo > 0.0 && rate < 0.0 && (d2 - self.lo).abs() <= margin {
+            Some(Boundary::Inner)
+        } else if self.hi < f64::INFINITY && rate > 0.0 && (self.hi - d2).abs() <= margin {
+            Some(Boundary::Outer)
+        } else {
+            None
+        }
+    }
+
     /// `g` and `ġ` (module documentation) from `d²` and its rate.
     #[inline(always)]
     pub fn indicator(&self, d2: f64, rate: f64) -> (f64, f64) {

@@ -901,10 +901,14 @@ impl Sites {
         };
         if let SiteSearch::Deferred { .. } = from {
             // A search that starts with its pair off the stored level has missed an event.
-            let (d2, _) = geo.distance2(cache, t0);
+            let (d2, rate) = geo.distance2(cache, t0);
             let tol = 1e-7 * band.scale;
             if d2 < band.lo - tol || d2 > band.hi + tol {
                 self.stats.off_terrace += 1;
+            }
+            if let Some(boundary) = band.leaving(d2, rate) {
+                self.stats.roots += 1;
+                return SiteSearch::Root(t0, boundary);
             }
         }
         let key = mix(self.jitter_key ^ u64::from(geo.k));
@@ -1918,6 +1922,17 @@ mod tests {
             energy: 0.0,
         });
         assert_eq!(b0.indicator(3.0, -1.0), (0.75, -1.0));
+        // On a boundary: leaving only when moving out; just crossed in (moving in), or
+        // grazing, or inside, it is not leaving.
+        assert_eq!(b.leaving(2.25, 0.5), Some(Boundary::Outer));
+        assert_eq!(b.leaving(2.25 * (1.0 - 1e-13), 0.5), Some(Boundary::Outer));
+        assert_eq!(b.leaving(1.0, -0.5), Some(Boundary::Inner));
+        assert_eq!(b.leaving(2.25, -0.5), None);
+        assert_eq!(b.leaving(2.25, 0.0), None);
+        assert_eq!(b.leaving(1.0, 0.5), None);
+        assert_eq!(b.leaving(2.2, 0.5), None);
+        assert_eq!(b0.leaving(2.25, -0.1), Some(Boundary::Inner));
+        assert_eq!(b0.leaving(2.25, 0.1), None);
     }
 }
 #[cfg(test)]
