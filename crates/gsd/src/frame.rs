@@ -96,6 +96,9 @@ pub struct Frame {
     /// Angular momenta as quaternions (`particles/angmom`, `f32` N×4; HOOMD's convention is
     /// `p = 2 q ⊗ (0, L_body)`, in mass·length²/time).
     pub angmom: Option<Vec<[f32; 4]>>,
+    /// Periodic images (`particles/image`, `i32` N×3; box lengths): the unwrapped position is
+    /// `position + image · (box vectors)`.
+    pub image: Option<Vec<[i32; 3]>>,
     /// The type of each particle, an index into `types` (`particles/typeid`, `u32` N).
     pub typeid: Vec<u32>,
     /// Type names (`particles/types`, NUL-padded `i8` rows).
@@ -121,6 +124,7 @@ impl Default for Frame {
             orientation: None,
             velocity: None,
             angmom: None,
+            image: None,
             typeid: Vec::new(),
             types: Vec::new(),
             type_shapes: Vec::new(),
@@ -156,6 +160,7 @@ impl Frame {
             ("orientation", self.orientation.as_ref().map(Vec::len)),
             ("velocity", self.velocity.as_ref().map(Vec::len)),
             ("angmom", self.angmom.as_ref().map(Vec::len)),
+            ("image", self.image.as_ref().map(Vec::len)),
         ];
         for (what, len) in lens {
             if let Some(len) = len.filter(|&l| l != n) {

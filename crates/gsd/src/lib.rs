@@ -11,7 +11,7 @@
 //! - [`Reader`]: opens a file, counts frames, lists chunk names, reads a chunk of a frame as a
 //!   typed [`Array`] with its shape, or a whole [`Frame`];
 //! - [`Frame`]: the standard chunks, typed — step, [`SimBox`], positions, optional
-//!   orientations, velocities and angular momenta, type ids, type names, type [`Shape`]s — and
+//!   orientations, velocities, angular momenta and periodic images, type ids, type names, type [`Shape`]s — and
 //!   free `log/...` quantities as [`Chunk`]s;
 //! - [`Error`]: every failure, including every way a file can be corrupt or truncated; reading
 //!   never panics on file content.

@@ -302,6 +302,7 @@ impl Reader {
         let orientation = self.per_particle::<f32, 4>(frame, "particles/orientation", n, n0)?;
         let velocity = self.per_particle::<f32, 3>(frame, "particles/velocity", n, n0)?;
         let angmom = self.per_particle::<f32, 4>(frame, "particles/angmom", n, n0)?;
+        let image = self.per_particle::<i32, 3>(frame, "particles/image", n, n0)?;
         let typeid = self
             .per_particle::<u32, 1>(frame, "particles/typeid", n, n0)?
             .map(|rows| rows.into_iter().map(|[t]| t).collect())
@@ -330,6 +331,7 @@ impl Reader {
             orientation,
             velocity,
             angmom,
+            image,
             typeid,
             types,
             type_shapes,

@@ -271,6 +271,9 @@ impl Writer {
         if let Some(p) = &frame.angmom {
             add("particles/angmom", flat(p), 4);
         }
+        if let Some(p) = &frame.image {
+            add("particles/image", flat(p), 3);
+        }
         if first.is_none_or(|f| f.n != n || f.typeid != frame.typeid) {
             add("particles/typeid", Values::U32(frame.typeid.clone()), 1);
         }

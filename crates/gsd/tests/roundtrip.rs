@@ -48,6 +48,11 @@ fn frame(k: u64, n: usize) -> Frame {
         orientation: Some((0..n).map(|i| [odd(i), 0.5, -0.5, odd(i + 3)]).collect()),
         velocity: Some((0..n).map(|i| [odd(i + 1), odd(i + 2), 1.0]).collect()),
         angmom: Some((0..n).map(|i| [0.0, odd(i + 5), 2.0, k as f32]).collect()),
+        image: Some(
+            (0..n as i32)
+                .map(|i| [i - 1, i32::MIN + i, i32::MAX - k as i32])
+                .collect(),
+        ),
         typeid: (0..n as u32).map(|i| i % 3).collect(),
         types: vec!["A".into(), "rod".into(), "benzene-like".into()],
         type_shapes: vec![
@@ -91,6 +96,7 @@ fn assert_same(a: &Frame, b: &Frame) {
         b.velocity.as_deref().map(bits)
     );
     assert_eq!(a.angmom.as_deref().map(bits), b.angmom.as_deref().map(bits));
+    assert_eq!(a.image, b.image);
     assert_eq!(a.typeid, b.typeid);
     assert_eq!(a.types, b.types);
     assert_eq!(a.type_shapes, b.type_shapes);

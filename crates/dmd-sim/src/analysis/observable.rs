@@ -329,8 +329,10 @@ pub struct Observers {
     pub correlations: Option<Correlations>,
     /// Pressure and energy series.
     pub series: Option<Series>,
-    /// Trajectory frames (written by the output module).
+    /// Trajectory frames (written by the output module), frame stream 0.
     pub trajectory: Option<crate::analysis::output::Trajectory>,
+    /// GSD trajectory frames, frame stream 1.
+    pub gsd: Option<crate::analysis::output::GsdTrajectory>,
     /// The per-sample series behind the summary's error bars.
     pub samples: Option<crate::analysis::smooth::Samples>,
     /// The smooth potential (terraced rods and Gay–Berne), evaluated at every
@@ -346,6 +348,8 @@ pub struct Observers {
     pub max_bytes: Option<u64>,
     /// Estimated bytes of one trajectory frame (set at the first frame).
     frame_bytes: f64,
+    /// Estimated bytes of one GSD frame (set at the first frame).
+    gsd_frame_bytes: f64,
 }
 
 impl Sampler for Observers {
@@ -370,13 +374,29 @@ impl Sampler for Observers {
         }
     }
 
-    fn frame(&mut self, view: &View<'_>) {
-        if let Some(t) = &mut self.trajectory {
-            t.write_frame(view);
-            let rods = !view.axes.is_empty();
-            self.frame_bytes = view.bodies.len() as f64
-                * crate::analysis::output::trajectory_line_bytes(rods)
-                + 200.0;
+    fn frame(&mut self, stream: usize, view: &View<'_>) {
+        use crate::analysis::output::{GSD_FRAME_BYTES, GSD_PARTICLE_BYTES, trajectory_line_bytes};
+        // Semi-flexible molecules are written as their atoms.
+        let atoms = !view.atoms.is_empty();
+        let particles = if atoms {
+            view.atoms.iter().map(|(q, _)| q.len()).sum()
+        } else {
+            view.bodies.len()
+        } as f64;
+        match stream {
+            0 => {
+                if let Some(t) = &mut self.trajectory {
+                    t.write_frame(view);
+                    let oriented = !view.attitudes.is_empty();
+                    self.frame_bytes = particles * trajectory_line_bytes(oriented, atoms) + 200.0;
+                }
+            }
+            _ => {
+                if let Some(g) = &mut self.gsd {
+                    g.write_frame(view);
+                    self.gsd_frame_bytes = particles * GSD_PARTICLE_BYTES + GSD_FRAME_BYTES;
+                }
+            }
         }
     }
 
@@ -402,6 +422,17 @@ impl Sampler for Observers {
                  raise output.max_bytes",
                 short(frames),
                 short(frames * self.frame_bytes),
+                short(max)
+            ));
+        }
+        let frames = self.gsd.as_ref().map_or(0, |g| g.frames()) as f64;
+        if frames * self.gsd_frame_bytes > max {
+            return Some(format!(
+                "output.gsd: trajectory.gsd has reached {} frames (about {} bytes), the limit \
+                 output.max_bytes = {}: lengthen output.gsd.interval, or raise \
+                 output.max_bytes",
+                short(frames),
+                short(frames * self.gsd_frame_bytes),
                 short(max)
             ));
         }

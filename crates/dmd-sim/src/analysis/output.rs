@@ -1,10 +1,14 @@
-//! Files a run writes: `summary.json`, observables as CSV with an SVG plot each, and an
-//! extended XYZ trajectory. Every file is written to a temporary name in the output folder and
-//! renamed into place when complete, so a crash never leaves a half-written result behind.
+//! Files a run writes: `summary.json`, observables as CSV with an SVG plot each, an extended
+//! XYZ trajectory and a GSD trajectory. Every file but the GSD trajectory is written to a
+//! temporary name in the output folder and renamed into place when complete, so a crash never
+//! leaves a half-written result behind; the GSD file is complete after every frame (its writer
+//! commits each frame), so it is written in place and can be watched while the run goes on.
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
+
+use glam::{DQuat, DVec3};
 
 use crate::engine::simulation::View;
 
@@ -15,11 +19,24 @@ pub const SERIES_ROW_BYTES: f64 = 150.0;
 /// Bytes of one lag of the correlation buffers (MSD, VACF, two orientational ACFs, count).
 pub const LAG_BYTES: f64 = 40.0;
 
-/// Bytes per body of one trajectory frame: species name, position and velocity with ten
-/// decimals and the id; rods add a quaternion with twelve and the shape.
-pub fn trajectory_line_bytes(rods: bool) -> f64 {
-    if rods { 190.0 } else { 110.0 }
+/// Bytes of one line of a `trajectory.xyz` frame: species name, position and velocity with
+/// ten decimals and the id; a body with an attitude adds a quaternion with twelve and the
+/// shape, an atom of a semi-flexible molecule its molecule's id.
+pub fn trajectory_line_bytes(oriented: bool, atom: bool) -> f64 {
+    match (oriented, atom) {
+        (true, _) => 190.0,
+        (false, true) => 120.0,
+        (false, false) => 110.0,
+    }
 }
+
+/// Bytes of one particle of a `trajectory.gsd` frame: position, orientation, velocity, image
+/// and angular momentum (17 numbers of 4 bytes).
+pub const GSD_PARTICLE_BYTES: f64 = 68.0;
+
+/// Bytes of a `trajectory.gsd` frame beyond its particles: step, the time and energies in
+/// `log/`, index entries (with the index's growth by doubling) and, once, the types and shapes.
+pub const GSD_FRAME_BYTES: f64 = 1024.0;
 
 /// A number in short form: `8e15`, `2.8e9`, `0.001`, `150`.
 pub fn short(x: f64) -> String {
@@ -169,9 +186,86 @@ pub fn plot_svg(
     std::fs::rename(&tmp, path).map_err(|e| io_err(path, e))
 }
 
-/// An extended XYZ trajectory (readable by OVITO): per frame the body count, a comment line
+/// How a trajectory frame draws the bodies of one species.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Drawing {
+    /// A sphere of `diameter` (length).
+    Sphere {
+        /// Diameter (length).
+        diameter: f64,
+    },
+    /// A rod: an ellipsoid along its body z axis ([`Trajectory::with_shape`], by default
+    /// semi-axes 0.5, 0.5 and 1.5 length units).
+    Rod,
+    /// A rigid site molecule: its sites in its body (principal) frame, relative to its centre
+    /// (length), and their diameters (length).
+    Sites {
+        /// Site positions in the body frame (length).
+        centres: Vec<DVec3>,
+        /// Site diameters (length).
+        diameters: Vec<f64>,
+    },
+    /// A semi-flexible molecule, drawn as its atoms: the site kind of each atom, an index into
+    /// [`Layout::kinds`].
+    Atoms {
+        /// Site kind of each atom.
+        kinds: Vec<u32>,
+    },
+}
+
+impl Drawing {
+    /// The semi-axes (length) of the ellipsoid an extended XYZ frame draws a body with an
+    /// attitude as: for site molecules the extent of the sites along each body axis.
+    fn semi_axes(&self, rod: [f64; 3]) -> [f64; 3] {
+        match self {
+            Drawing::Sphere { diameter } => [0.5 * diameter; 3],
+            Drawing::Rod | Drawing::Atoms { .. } => rod,
+            Drawing::Sites { centres, diameters } => {
+                let mut e = [0.0f64; 3];
+                for (c, d) in centres.iter().zip(diameters) {
+                    for (k, x) in c.to_array().into_iter().enumerate() {
+                        e[k] = e[k].max(x.abs() + 0.5 * d);
+                    }
+                }
+                // Six decimals: a drawing's size, not a measurement.
+                e.map(|x| (x * 1e6).round() / 1e6)
+            }
+        }
+    }
+}
+
+/// What the trajectory writers know of a scene's bodies: names and drawings per species.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Layout {
+    /// Species names.
+    pub species: Vec<String>,
+    /// How each species is drawn.
+    pub drawings: Vec<Drawing>,
+    /// Site kinds of semi-flexible molecules: name and diameter (length).
+    pub kinds: Vec<(String, f64)>,
+}
+
+impl Layout {
+    /// Whether the frames hold atoms (semi-flexible molecules) instead of bodies.
+    pub fn atoms(&self) -> bool {
+        self.drawings
+            .iter()
+            .any(|d| matches!(d, Drawing::Atoms { .. }))
+    }
+}
+
+/// Why a frame of semi-flexible molecules has no atoms for a body.
+fn missing_atoms(i: usize, now: f64) -> std::io::Error {
+    std::io::Error::other(format!(
+        "molecule {i} has no atom positions at time {now}: its RATTLE step failed"
+    ))
+}
+
+/// An extended XYZ trajectory (readable by OVITO): per frame the line count, a comment line
 /// with `Lattice`, `Properties=species:S:1:pos:R:3:velo:R:3:id:I:1` and `Time`, and one line per
-/// body. Rods add `orientation:R:4` (unit quaternion, scalar last) and `aspherical_shape:R:3`
+/// body. Bodies with an attitude (rods, site molecules) add `orientation:R:4` (unit quaternion,
+/// scalar last, OVITO's Orientation.X/Y/Z/W) and `aspherical_shape:R:3` before the id;
+/// semi-flexible molecules are written as their atoms, one line each, with `molecule:I:1`
 /// before the id. Written to `trajectory.xyz.partial` and renamed when the run ends.
 #[derive(Debug)]
 pub struct Trajectory {
@@ -182,6 +276,7 @@ pub struct Trajectory {
     error: Option<String>,
     frames: u64,
     shape: [f64; 3],
+    layout: Layout,
 }
 
 /// Semi-axes of the ellipsoid a rod is drawn as, unless [`Trajectory::with_shape`] says
@@ -189,8 +284,8 @@ pub struct Trajectory {
 const ROD_SHAPE: [f64; 3] = [0.5, 0.5, 1.5];
 
 /// The unit quaternion (shortest arc) that turns `z` into `axis`.
-pub fn axis_quaternion(axis: glam::DVec3) -> glam::DQuat {
-    glam::DQuat::from_rotation_arc(glam::DVec3::Z, axis.normalize())
+pub fn axis_quaternion(axis: DVec3) -> DQuat {
+    DQuat::from_rotation_arc(DVec3::Z, axis.normalize())
 }
 
 impl Trajectory {
@@ -209,6 +304,7 @@ impl Trajectory {
             error: None,
             frames: 0,
             shape: ROD_SHAPE,
+            layout: Layout::default(),
         })
     }
 
@@ -219,46 +315,97 @@ impl Trajectory {
         self
     }
 
+    /// The same trajectory drawing each species as `layout` says (site molecules as the
+    /// ellipsoids their sites span, semi-flexible molecules as their atoms); without it, bodies
+    /// with an attitude are drawn as rods.
+    pub fn with_layout(mut self, layout: Layout) -> Self {
+        self.layout = layout;
+        self
+    }
+
     /// Appends a frame (errors are kept and reported by [`finish`](Self::finish)).
     pub fn write_frame(&mut self, view: &View<'_>) {
         if self.error.is_some() {
             return;
         }
         let l = view.lengths;
+        let wrap = |p: DVec3| {
+            DVec3::new(
+                p.x.rem_euclid(l.x),
+                p.y.rem_euclid(l.y),
+                p.z.rem_euclid(l.z),
+            )
+        };
         let mut go = || -> std::io::Result<()> {
-            writeln!(self.out, "{}", view.bodies.len())?;
-            let rods = !view.axes.is_empty();
-            let props = if rods {
+            let head = |out: &mut BufWriter<File>, lines: usize, props: &str| {
+                writeln!(out, "{lines}")?;
+                writeln!(
+                    out,
+                    "Lattice=\"{} 0 0 0 {} 0 0 0 {}\" Properties={props} Time={} pbc=\"T T T\"",
+                    l.x, l.y, l.z, view.elapsed
+                )
+            };
+            if self.layout.atoms() {
+                if view.atoms.len() < view.bodies.len() {
+                    return Err(missing_atoms(view.atoms.len(), view.now));
+                }
+                let lines = view.atoms.iter().map(|(q, _)| q.len()).sum();
+                head(
+                    &mut self.out,
+                    lines,
+                    "species:S:1:pos:R:3:velo:R:3:molecule:I:1:id:I:1",
+                )?;
+                let mut id = 0;
+                for (i, (b, (q, u))) in view.bodies.iter().zip(&view.atoms).enumerate() {
+                    let kinds = match &self.layout.drawings[b.species as usize] {
+                        Drawing::Atoms { kinds } => kinds.as_slice(),
+                        _ => &[],
+                    };
+                    let centre = view.position(i);
+                    for (a, (&qa, &ua)) in q.iter().zip(u).enumerate() {
+                        let p = wrap(centre + qa);
+                        let v = b.v + ua;
+                        let kind = kinds
+                            .get(a)
+                            .map_or("X", |&k| self.layout.kinds[k as usize].0.as_str());
+                        writeln!(
+                            self.out,
+                            "{kind} {:.10} {:.10} {:.10} {:.10} {:.10} {:.10} {i} {id}",
+                            p.x, p.y, p.z, v.x, v.y, v.z
+                        )?;
+                        id += 1;
+                    }
+                }
+                return Ok(());
+            }
+            let oriented = !view.attitudes.is_empty();
+            let props = if oriented {
                 "species:S:1:pos:R:3:velo:R:3:orientation:R:4:aspherical_shape:R:3:id:I:1"
             } else {
                 "species:S:1:pos:R:3:velo:R:3:id:I:1"
             };
-            writeln!(
-                self.out,
-                "Lattice=\"{} 0 0 0 {} 0 0 0 {}\" Properties={props} Time={} pbc=\"T T T\"",
-                l.x, l.y, l.z, view.elapsed
-            )?;
+            head(&mut self.out, view.bodies.len(), props)?;
             for (i, b) in view.bodies.iter().enumerate() {
-                let p = view.position(i);
-                let p = glam::DVec3::new(
-                    p.x.rem_euclid(l.x),
-                    p.y.rem_euclid(l.y),
-                    p.z.rem_euclid(l.z),
-                );
+                let p = wrap(view.position(i));
                 write!(
                     self.out,
                     "{} {:.10} {:.10} {:.10} {:.10} {:.10} {:.10} ",
                     self.names[b.species as usize], p.x, p.y, p.z, b.v.x, b.v.y, b.v.z
                 )?;
-                if rods {
-                    // The rotation taking the body's long axis z to the rod's axis, as a unit
-                    // quaternion with the scalar last (OVITO's Orientation); the shape draws
-                    // the rod as an ellipsoid three times as long as it is wide.
-                    let q = axis_quaternion(view.axes[i]);
+                if oriented {
+                    // The attitude (body → lab) as a unit quaternion with the scalar last
+                    // (OVITO's Orientation); a rod is drawn as an ellipsoid along its body z
+                    // axis, three times as long as it is wide, a site molecule as the
+                    // ellipsoid its sites span along its principal axes.
+                    let q = view.attitudes[i];
+                    let e = match self.layout.drawings.get(b.species as usize) {
+                        None | Some(Drawing::Rod) => self.shape,
+                        Some(d) => d.semi_axes(self.shape),
+                    };
                     write!(
                         self.out,
                         "{:.12} {:.12} {:.12} {:.12} {} {} {} ",
-                        q.x, q.y, q.z, q.w, self.shape[0], self.shape[1], self.shape[2]
+                        q.x, q.y, q.z, q.w, e[0], e[1], e[2]
                     )?;
                 }
                 writeln!(self.out, "{i}")?;
@@ -333,6 +480,7 @@ impl Trajectory {
             error: None,
             frames,
             shape: ROD_SHAPE,
+            layout: Layout::default(),
         })
     }
 
@@ -350,6 +498,285 @@ impl Trajectory {
             .sync_all()
             .map_err(|e| io_err(&self.tmp, e))?;
         std::fs::rename(&self.tmp, &self.path).map_err(|e| io_err(&self.path, e))
+    }
+}
+
+/// A GSD trajectory (HOOMD-blue's format, read by OVITO, freud and Python's `gsd.hoomd`),
+/// written to `trajectory.gsd` in place: the `gsd` writer commits each frame, so the file is
+/// complete after every frame. Per frame:
+///
+/// - `configuration/step`: events of the production phase so far; `configuration/box`: the
+///   box edges (length);
+/// - `particles/position`: positions wrapped into the centred box `[-L/2, L/2)` (length), and
+///   `particles/image` the periodic images, so that `position + image · L` is the unwrapped
+///   position;
+/// - `particles/orientation`: the attitude (body → lab) as `(w, x, y, z)`, the identity for
+///   spheres and atoms;
+/// - `particles/velocity` (length/time) and, for bodies with an attitude,
+///   `particles/angmom`: HOOMD's `2 q ⊗ (0, L_body)` of the spin angular momentum
+///   (mass·length²/time; the moments of inertia are not written);
+/// - `particles/typeid`, `particles/types`: the species (for semi-flexible molecules, written
+///   as their atoms, the site kinds), `particles/type_shapes`: a `Sphere` of the hard-core
+///   diameter, a rod's `Ellipsoid` along its body z axis, a site molecule's `SphereUnion` of
+///   its sites in its principal frame;
+/// - `log/dmd/time`: the production time (time), `log/dmd/kinetic_energy` and
+///   `log/dmd/potential_energy` (energy).
+///
+/// Units are the run's internal ones (those of `trajectory.xyz`); GSD records none.
+#[derive(Debug)]
+pub struct GsdTrajectory {
+    path: PathBuf,
+    writer: gsd::Writer,
+    layout: Layout,
+    rod: [f64; 3],
+    error: Option<String>,
+}
+
+impl GsdTrajectory {
+    /// Creates `path` (replacing any file there) for bodies drawn as `layout` says.
+    ///
+    /// # Errors
+    /// [`OutputError`].
+    pub fn create(path: &Path, layout: Layout) -> Result<Self, OutputError> {
+        let writer = gsd::Writer::create(path, "dmd").map_err(|e| io_err(path, e))?;
+        Ok(GsdTrajectory {
+            path: path.to_owned(),
+            writer,
+            layout,
+            rod: ROD_SHAPE,
+            error: None,
+        })
+    }
+
+    /// Continues the trajectory of a resumed run at the `frames` frames a checkpoint recorded:
+    /// frames written after that point are dropped. The file is rebuilt from its first
+    /// `frames` frames (a GSD file's index and name list are rewritten in place as it grows,
+    /// so cutting its bytes would not do), then appended to, which leaves exactly the bytes an
+    /// uninterrupted run writes.
+    ///
+    /// # Errors
+    /// [`OutputError`] if the file is missing, unreadable or holds fewer frames.
+    pub fn reopen(path: &Path, layout: Layout, frames: u64) -> Result<Self, OutputError> {
+        let fail = |e: &dyn std::fmt::Display| {
+            io_err(path, format!("cannot continue the GSD trajectory: {e}"))
+        };
+        let mut reader = gsd::Reader::open(path).map_err(|e| fail(&e))?;
+        if reader.frames() < frames {
+            return Err(fail(&format!(
+                "it has {} frames, the checkpoint recorded {frames}",
+                reader.frames()
+            )));
+        }
+        let tmp = temporary(path);
+        let mut writer = gsd::Writer::create(&tmp, "dmd").map_err(|e| fail(&e))?;
+        for k in 0..frames {
+            let frame = reader.read_frame(k).map_err(|e| fail(&e))?;
+            writer.append(&frame).map_err(|e| fail(&e))?;
+        }
+        writer.finish().map_err(|e| fail(&e))?;
+        drop(reader);
+        std::fs::rename(&tmp, path).map_err(|e| io_err(path, e))?;
+        let writer = gsd::Writer::append_to(path).map_err(|e| fail(&e))?;
+        Ok(GsdTrajectory {
+            path: path.to_owned(),
+            writer,
+            layout,
+            rod: ROD_SHAPE,
+            error: None,
+        })
+    }
+
+    /// The type names and shapes of the frames.
+    fn types(&self) -> Result<(Vec<String>, Vec<gsd::Shape>), String> {
+        if self.layout.atoms() {
+            let names = self.layout.kinds.iter().map(|(n, _)| n.clone()).collect();
+            let shapes = self
+                .layout
+                .kinds
+                .iter()
+                .map(|&(_, d)| gsd::Shape::Sphere { diameter: d })
+                .collect();
+            return Ok((names, shapes));
+        }
+        let mut shapes = Vec::with_capacity(self.layout.drawings.len());
+        for d in &self.layout.drawings {
+            shapes.push(match d {
+                Drawing::Sphere { diameter } => gsd::Shape::Sphere {
+                    diameter: *diameter,
+                },
+                Drawing::Rod => gsd::Shape::Ellipsoid {
+                    a: self.rod[0],
+                    b: self.rod[1],
+                    c: self.rod[2],
+                },
+                Drawing::Sites { centres, diameters } => {
+                    // GSD's SphereUnion (OVITO draws it): the sites in the body frame.
+                    let num = |x: f64| {
+                        if x.is_finite() {
+                            Ok(format!("{x:?}"))
+                        } else {
+                            Err(format!("a site of the drawing is at {x}"))
+                        }
+                    };
+                    let mut cs = Vec::with_capacity(centres.len());
+                    for c in centres {
+                        cs.push(format!("[{},{},{}]", num(c.x)?, num(c.y)?, num(c.z)?));
+                    }
+                    let ds = diameters
+                        .iter()
+                        .map(|&d| num(d))
+                        .collect::<Result<Vec<_>, _>>()?;
+                    gsd::Shape::Other(format!(
+                        r#"{{"type":"SphereUnion","centers":[{}],"diameters":[{}]}}"#,
+                        cs.join(","),
+                        ds.join(",")
+                    ))
+                }
+                Drawing::Atoms { .. } => gsd::Shape::Undefined,
+            });
+        }
+        Ok((self.layout.species.clone(), shapes))
+    }
+
+    /// The frame of `view`.
+    fn frame_of(&self, view: &View<'_>) -> Result<gsd::Frame, String> {
+        let l = view.lengths;
+        // Wrapped into [-L/2, L/2) in single precision, with the image that restores the
+        // unwrapped position; a coordinate that rounds up to +L/2 goes to −L/2 (same point).
+        let wrap = |u: DVec3| -> ([f32; 3], [i32; 3]) {
+            let mut p = [0.0f32; 3];
+            let mut im = [0i32; 3];
+            for k in 0..3 {
+                let (x, len) = (u[k], l[k]);
+                let n = ((x + 0.5 * len) / len).floor();
+                let mut w = (x - n * len) as f32;
+                let mut n = n as i32;
+                let half = (0.5 * len) as f32;
+                if w >= half {
+                    w = -half;
+                    n += 1;
+                }
+                p[k] = w;
+                im[k] = n;
+            }
+            (p, im)
+        };
+        let f3 = |v: DVec3| v.as_vec3().to_array();
+        let (types, type_shapes) = self.types()?;
+        let mut frame = gsd::Frame {
+            step: view.events,
+            sim_box: gsd::SimBox::orthorhombic(l.x as f32, l.y as f32, l.z as f32),
+            types,
+            type_shapes,
+            ..gsd::Frame::default()
+        };
+        let identity = [1.0f32, 0.0, 0.0, 0.0];
+        let mut orientation = Vec::new();
+        let mut velocity = Vec::new();
+        let mut image = Vec::new();
+        if self.layout.atoms() {
+            if view.atoms.len() < view.bodies.len() {
+                return Err(missing_atoms(view.atoms.len(), view.now).to_string());
+            }
+            for (i, (b, (q, u))) in view.bodies.iter().zip(&view.atoms).enumerate() {
+                let kinds = match &self.layout.drawings[b.species as usize] {
+                    Drawing::Atoms { kinds } => kinds.as_slice(),
+                    _ => &[],
+                };
+                let centre = view.unwrapped(i);
+                for (a, (&qa, &ua)) in q.iter().zip(u).enumerate() {
+                    let (p, im) = wrap(centre + qa);
+                    frame.position.push(p);
+                    image.push(im);
+                    velocity.push(f3(b.v + ua));
+                    orientation.push(identity);
+                    frame.typeid.push(
+                        *kinds.get(a).ok_or_else(|| {
+                            format!("molecule {i} has more atoms than its species")
+                        })?,
+                    );
+                }
+            }
+        } else {
+            let oriented = view.attitudes.len() == view.bodies.len();
+            let spun = oriented && view.spins.len() == view.bodies.len();
+            let mut angmom = Vec::new();
+            for (i, b) in view.bodies.iter().enumerate() {
+                let (p, im) = wrap(view.unwrapped(i));
+                frame.position.push(p);
+                image.push(im);
+                velocity.push(f3(b.v));
+                frame.typeid.push(b.species);
+                if oriented {
+                    let q = view.attitudes[i];
+                    orientation.push([q.w as f32, q.x as f32, q.y as f32, q.z as f32]);
+                    if spun {
+                        // HOOMD's conjugate momentum 2 q ⊗ (0, L_body) = 2 (0, L_lab) ⊗ q.
+                        let s = view.spins[i];
+                        let p = (DQuat::from_xyzw(s.x, s.y, s.z, 0.0) * q) * 2.0;
+                        angmom.push([p.w as f32, p.x as f32, p.y as f32, p.z as f32]);
+                    }
+                } else {
+                    orientation.push(identity);
+                }
+            }
+            if spun {
+                frame.angmom = Some(angmom);
+            }
+        }
+        frame.orientation = Some(orientation);
+        frame.velocity = Some(velocity);
+        frame.image = Some(image);
+        for (key, x) in [
+            ("dmd/time", view.elapsed),
+            ("dmd/kinetic_energy", view.kinetic),
+            ("dmd/potential_energy", view.potential),
+        ] {
+            frame.log.insert(key.to_owned(), gsd::Chunk::scalar(x));
+        }
+        Ok(frame)
+    }
+
+    /// Appends and commits a frame (errors are kept and reported by
+    /// [`finish`](Self::finish)).
+    pub fn write_frame(&mut self, view: &View<'_>) {
+        if self.error.is_some() {
+            return;
+        }
+        let result = self
+            .frame_of(view)
+            .and_then(|frame| self.writer.append(&frame).map_err(|e| e.to_string()));
+        if let Err(e) = result {
+            self.error = Some(e);
+        }
+    }
+
+    /// Frames in the file.
+    pub fn frames(&self) -> u64 {
+        self.writer.frames()
+    }
+
+    /// The frame count a checkpoint records, with the frames put on disk.
+    ///
+    /// # Errors
+    /// [`OutputError`] with the first write error of the run, if any.
+    pub fn mark(&mut self) -> Result<u64, OutputError> {
+        if let Some(e) = &self.error {
+            return Err(io_err(&self.path, e));
+        }
+        self.writer.flush().map_err(|e| io_err(&self.path, e))?;
+        Ok(self.frames())
+    }
+
+    /// Puts the file on disk and closes it.
+    ///
+    /// # Errors
+    /// [`OutputError`] with the first write error of the run, if any.
+    pub fn finish(self) -> Result<(), OutputError> {
+        if let Some(e) = &self.error {
+            return Err(io_err(&self.path, e));
+        }
+        self.writer.finish().map_err(|e| io_err(&self.path, e))
     }
 }
 

@@ -185,13 +185,6 @@ pub(crate) fn check_rest(scene: &Scene) -> Result<(), SceneError> {
             "not available for semi-flexible molecules: they have no fixed axis",
         ));
     }
-    if o.trajectory.is_some() {
-        return Err(SceneError::invalid(
-            "output.trajectory",
-            "not available for semi-flexible molecules: a trajectory frame carries one axis \
-             per body, not the atoms of a flexing molecule",
-        ));
-    }
     Ok(())
 }
 

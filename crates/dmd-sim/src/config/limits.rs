@@ -15,7 +15,9 @@
 //! - **Skin**: at least [`MIN_SKIN_FRACTION`] of the interaction reach (in `run`, where the
 //!   reach is known).
 
-pub use crate::analysis::output::{LAG_BYTES, SERIES_ROW_BYTES, short, trajectory_line_bytes};
+pub use crate::analysis::output::{
+    GSD_FRAME_BYTES, GSD_PARTICLE_BYTES, LAG_BYTES, SERIES_ROW_BYTES, short, trajectory_line_bytes,
+};
 pub use crate::config::scene::{DEFAULT_MAX_BYTES, MAX_STEP_ENERGY};
 use crate::config::scene::{PotentialSpec, Scene, SceneError};
 use crate::config::units::Units;
@@ -188,17 +190,45 @@ pub fn check_outputs(scene: &Scene) -> Result<(), SceneError> {
             }
         }
     }
-    if let (Some(tr), Some(t)) = (&o.trajectory, scene.run.time) {
+    // Semi-flexible molecules are written as their atoms; rods and rigid site molecules with
+    // their attitudes.
+    let atoms = scene.has_bonds();
+    let particles = if atoms {
+        scene
+            .species
+            .iter()
+            .map(|s| s.count as f64 * s.sites.as_ref().map_or(1, Vec::len) as f64)
+            .sum()
+    } else {
+        n
+    };
+    let oriented =
+        !atoms && (scene.has_sites() || scene.species.iter().any(|s| s.inertia.is_some()));
+    let what = if atoms { "atoms" } else { "bodies" };
+    for (key, spec, frame_bytes) in [
+        (
+            "output.trajectory.interval",
+            &o.trajectory,
+            particles * trajectory_line_bytes(oriented, atoms) + 200.0,
+        ),
+        (
+            "output.gsd.interval",
+            &o.gsd,
+            particles * GSD_PARTICLE_BYTES + GSD_FRAME_BYTES,
+        ),
+    ] {
+        let (Some(tr), Some(t)) = (spec, scene.run.time) else {
+            continue;
+        };
         let frames = (t / tr.interval).floor() + 1.0;
-        let rods = scene.species.iter().any(|s| s.inertia.is_some());
-        let bytes = frames * (n * trajectory_line_bytes(rods) + 200.0);
+        let bytes = frames * frame_bytes;
         if bytes > limit {
             return Err(too_big(
-                "output.trajectory.interval".to_owned(),
+                key.to_owned(),
                 format!(
-                    "{} frames of {} bodies (run.time = {} every {})",
+                    "{} frames of {} {what} (run.time = {} every {})",
                     short(frames),
-                    n,
+                    particles,
                     short(t),
                     short(tr.interval)
                 ),

@@ -791,6 +791,8 @@ pub struct OutputSpec {
     pub series: bool,
     /// Extended XYZ trajectory → `trajectory.xyz`.
     pub trajectory: Option<TrajectorySpec>,
+    /// GSD trajectory (HOOMD-blue's format) → `trajectory.gsd`.
+    pub gsd: Option<TrajectorySpec>,
     /// An SVG plot next to each CSV file (default true).
     #[serde(default = "yes")]
     pub plots: bool,
@@ -826,6 +828,7 @@ impl Default for OutputSpec {
             orientation_acf: None,
             series: false,
             trajectory: None,
+            gsd: None,
             plots: true,
             smooth_estimators: None,
             smooth_every: None,
@@ -1246,6 +1249,9 @@ impl Scene {
         if let Some(tr) = &o.trajectory {
             positive("output.trajectory.interval", tr.interval)?;
         }
+        if let Some(g) = &o.gsd {
+            positive("output.gsd.interval", g.interval)?;
+        }
         if o.max_bytes == Some(0) {
             return Err(SceneError::invalid(
                 "output.max_bytes",
@@ -1408,6 +1414,7 @@ impl Scene {
                 ("output.vacf", o.vacf.is_some()),
                 ("output.series", o.series),
                 ("output.trajectory", o.trajectory.is_some()),
+                ("output.gsd", o.gsd.is_some()),
                 ("output.orientation_acf", o.orientation_acf.is_some()),
             ] {
                 if on {

@@ -404,18 +404,6 @@ pub(crate) fn check(scene: &Scene) -> Result<(), SceneError> {
             _ => {}
         }
     }
-    if o.trajectory.is_some()
-        && let Some(k) = types.iter().position(|t| !t.is_linear())
-    {
-        return Err(SceneError::invalid(
-            "output.trajectory",
-            format!(
-                "species `{}` is not a linear molecule: a trajectory frame carries one axis per \
-                 body, not the whole attitude of a non-linear molecule",
-                scene.species[k].name
-            ),
-        ));
-    }
     Ok(())
 }
 

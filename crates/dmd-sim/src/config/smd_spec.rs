@@ -143,6 +143,12 @@ pub fn check(scene: &Scene) -> Result<(), SceneError> {
             );
         }
     }
+    if scene.output.gsd.is_some() {
+        return refuse(
+            "output.gsd",
+            "the smd engine writes trajectory.xyz (output.trajectory) only",
+        );
+    }
     if scene.run.events.is_some() {
         return refuse(
             "run.events",

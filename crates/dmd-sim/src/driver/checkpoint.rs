@@ -46,7 +46,7 @@ use crate::models::search::SearchStats;
 /// First bytes of every checkpoint.
 pub const MAGIC: &[u8; 8] = b"\x89DMD-CK\n";
 /// The layout version this `dmd` writes and reads.
-pub const FORMAT_VERSION: u32 = 3;
+pub const FORMAT_VERSION: u32 = 4;
 /// The `dmd` version written into checkpoints.
 pub const CODE_VERSION: &str = env!("CARGO_PKG_VERSION");
 /// The checkpoint's file name in the output folder.
@@ -218,6 +218,8 @@ pub struct ObserverState {
     pub series: Option<Series>,
     /// The trajectory's temporary file length and frames.
     pub trajectory: Option<(u64, u64)>,
+    /// The GSD trajectory's frames.
+    pub gsd: Option<u64>,
     /// The per-sample series of the summary's error bars and smooth estimators.
     pub samples: Option<crate::analysis::smooth::Samples>,
 }

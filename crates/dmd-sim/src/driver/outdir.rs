@@ -13,6 +13,7 @@ pub const FILES: &[&str] = &[
     "summary.json",
     "checkpoint.dmd",
     "trajectory.xyz",
+    "trajectory.gsd",
     "rdf.csv",
     "rdf.svg",
     "msd.csv",

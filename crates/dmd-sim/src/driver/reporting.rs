@@ -261,5 +261,9 @@ pub(crate) fn write_observables(
         t.finish()?;
         files.push("trajectory.xyz".into());
     }
+    if let Some(g) = obs.gsd.take() {
+        g.finish()?;
+        files.push("trajectory.gsd".into());
+    }
     Ok(files)
 }

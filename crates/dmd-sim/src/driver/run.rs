@@ -15,7 +15,9 @@ use glam::DVec3;
 use serde::Serialize;
 
 use crate::analysis::observable::{Correlations, Observers, Rdf, Series};
-use crate::analysis::output::{OutputError, Trajectory, write_atomically, write_csv};
+use crate::analysis::output::{
+    Drawing, GsdTrajectory, Layout, OutputError, Trajectory, write_atomically, write_csv,
+};
 use crate::config::init::{Configuration, lattice, maxwell_boltzmann, read_orientations, read_xyz};
 use crate::config::rods::{
     Plan, equipartitioned_omegas, random_axes, rod_species, search_settings,
@@ -318,6 +320,7 @@ pub fn run_scene_with(
         model_name: plan.name(),
         options,
         smooth: std::cell::Cell::new(None),
+        layout: layout_of(scene, &plan),
     };
     if fault > 0.0 {
         // Checked with the scene: fault injection is for sphere scenes.
@@ -398,6 +401,58 @@ pub fn run_scene_with(
     }
 }
 
+/// How trajectory frames draw each species of a scene: spheres of their hard-core diameter (or
+/// innermost step), rods as ellipsoids, rigid site molecules as their sites, semi-flexible
+/// molecules as their atoms.
+fn layout_of(scene: &Scene, plan: &Plan) -> Layout {
+    let diameter = |p: &crate::engine::potential::StepPotential| p.core().unwrap_or(p.radii()[0]);
+    let species: Vec<String> = scene.species.iter().map(|s| s.name.clone()).collect();
+    let n = species.len() as u32;
+    let (drawings, kinds) = match plan {
+        Plan::Spheres(potentials) => (
+            (0..n)
+                .map(|s| Drawing::Sphere {
+                    diameter: diameter(potentials.get(s, s)),
+                })
+                .collect(),
+            Vec::new(),
+        ),
+        Plan::Rods(_) | Plan::GayBerne(_) => (vec![Drawing::Rod; species.len()], Vec::new()),
+        Plan::Sites(p) => (
+            p.types
+                .iter()
+                .map(|t| Drawing::Sites {
+                    centres: t.sites().to_vec(),
+                    diameters: t
+                        .site_species()
+                        .iter()
+                        .map(|&k| diameter(p.potentials.get(k, k)))
+                        .collect(),
+                })
+                .collect(),
+            Vec::new(),
+        ),
+        Plan::Flexible(p) => (
+            p.types
+                .iter()
+                .map(|t| Drawing::Atoms {
+                    kinds: t.site_species().to_vec(),
+                })
+                .collect(),
+            p.kinds
+                .iter()
+                .enumerate()
+                .map(|(k, name)| (name.clone(), diameter(p.potentials.get(k as u32, k as u32))))
+                .collect(),
+        ),
+    };
+    Layout {
+        species,
+        drawings,
+        kinds,
+    }
+}
+
 /// The terraced model of a rods scene: orientations and equipartitioned angular velocities.
 fn terraced_model<P: potential::PairPotential>(
     scene: &Scene,
@@ -448,6 +503,8 @@ struct Context<'a> {
     options: &'a RunOptions,
     /// The smooth estimator of a terraced scene, taken by the run.
     smooth: std::cell::Cell<Option<Box<dyn crate::analysis::smooth::Evaluate>>>,
+    /// How trajectory frames draw each species.
+    layout: Layout,
 }
 
 impl Context<'_> {
@@ -618,12 +675,23 @@ impl Context<'_> {
         if let (Some(_), Some(dir)) = (&o.trajectory, out) {
             let names = scene.species.iter().map(|s| s.name.clone()).collect();
             let path = dir.join("trajectory.xyz");
-            observers.trajectory = Some(match resume {
+            let trajectory = match resume {
                 Some((_, c)) if !fresh_production => {
                     let (len, frames) = c.observers.trajectory.unwrap_or((0, 0));
                     Trajectory::reopen(&path, names, len, frames)?
                 }
                 _ => Trajectory::create(&path, names)?,
+            };
+            observers.trajectory = Some(trajectory.with_layout(self.layout.clone()));
+        }
+        if let (Some(_), Some(dir)) = (&o.gsd, out) {
+            let path = dir.join("trajectory.gsd");
+            let layout = self.layout.clone();
+            observers.gsd = Some(match resume {
+                Some((_, c)) if !fresh_production => {
+                    GsdTrajectory::reopen(&path, layout, c.observers.gsd.unwrap_or(0))?
+                }
+                _ => GsdTrajectory::create(&path, layout)?,
             });
         }
         let stop = match (scene.run.events, scene.run.time, &scene.hmc) {
@@ -637,13 +705,13 @@ impl Context<'_> {
                 || observers.correlations.is_some()
                 || observers.series.is_some()
                 || observers.samples.is_some();
-            sim.begin_phase(
+            let interval = |t: &Option<crate::config::scene::TrajectorySpec>| {
+                t.as_ref().filter(|_| out.is_some()).map(|t| t.interval)
+            };
+            sim.begin_phase_with_frames(
                 had_thermostat && production_thermostat.is_none(),
                 o.sample_interval.filter(|_| wants_samples),
-                o.trajectory
-                    .as_ref()
-                    .filter(|_| out.is_some())
-                    .map(|t| t.interval),
+                [interval(&o.trajectory), interval(&o.gsd)],
             );
             if scene.hmc.is_some() {
                 sim.move_origin_here();
@@ -994,6 +1062,10 @@ impl Driver {
             Some(t) => Some(t.mark()?),
             None => None,
         };
+        let gsd = match &mut observers.gsd {
+            Some(g) => Some(g.mark()?),
+            None => None,
+        };
         let chain = &self.chain;
         self.saver.save(self.events, |source, every| {
             Ok(Checkpoint {
@@ -1007,6 +1079,7 @@ impl Driver {
                     correlations: observers.correlations.clone(),
                     series: observers.series.clone(),
                     trajectory,
+                    gsd,
                     samples: observers.samples.clone(),
                 },
                 chain: chain.clone(),

@@ -34,7 +34,7 @@ use serde::Serialize;
 use smd::{BodyModel, Integrator, Observer, Settings, SmdError, Snapshot, System};
 
 use crate::analysis::observable::{Correlations, Observers, Rdf, Series};
-use crate::analysis::output::{OutputError, Trajectory, write_atomically};
+use crate::analysis::output::{OutputError, Trajectory, axis_quaternion, write_atomically};
 use crate::config::init::{Configuration, lattice, maxwell_boltzmann, read_orientations, read_xyz};
 use crate::config::rods::{equipartitioned_omegas, random_axes};
 pub use crate::config::scene::{Engine, SmdSpec, SmoothingSpec};
@@ -699,6 +699,10 @@ impl Bridge<'_> {
             axes: sys.axes().to_vec(),
             rotational_kinetic: s.energy.kinetic_rotational,
             rotational_dof: sys.dof_rotational(),
+            events: self.steps,
+            attitudes: Vec::new(),
+            spins: Vec::new(),
+            atoms: Vec::new(),
         }
     }
 }
@@ -733,7 +737,10 @@ impl Observer for Bridge<'_> {
                 observers.sample(&view);
             }
             if frame {
-                observers.frame(&view);
+                // The rods' attitudes as the terraced model gives them (body z along the
+                // axis), so that both engines write the same orientation column.
+                let attitudes = view.axes.iter().map(|&a| axis_quaternion(a)).collect();
+                observers.frame(0, &View { attitudes, ..view });
             }
             self.observers = observers;
         }

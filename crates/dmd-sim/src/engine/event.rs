@@ -140,8 +140,8 @@ impl Event {
 pub enum SystemEvent {
     /// Sample the observables.
     Sample,
-    /// Write a trajectory frame.
-    Frame,
+    /// Write a trajectory frame of the given stream.
+    Frame(usize),
     /// An Andersen thermostat collision.
     Thermostat,
     /// The end of the current phase (a run length given in time).

@@ -17,7 +17,7 @@
 //! reach sphere, and may return virtual events.
 
 use collide::{Outcome, Particle, spheres};
-use glam::DVec3;
+use glam::{DQuat, DVec3};
 
 use crate::engine::event::{Boundary, Kind};
 use crate::engine::pair_state::PairStates;
@@ -237,6 +237,23 @@ pub trait PairModel {
     /// The unit long axis of body `i` at `now` (`None` for bodies without orientation).
     #[inline(always)]
     fn axis(&self, _i: u32, _now: f64) -> Option<DVec3> {
+        None
+    }
+
+    /// The whole attitude of body `i` at `now`: the unit quaternion that rotates body-frame
+    /// vectors into the lab frame (`None` for bodies without orientation, spheres, and for
+    /// molecules without a rigid attitude). Each model documents its body frame. Called when a
+    /// trajectory frame is written, never on the event path.
+    fn attitude(&self, _i: u32, _now: f64) -> Option<DQuat> {
+        None
+    }
+
+    /// The atoms of body `i` at `now` when the body has no rigid attitude and moves its atoms
+    /// itself (semi-flexible molecules): their positions relative to the body's centre and
+    /// their velocities relative to the centre's, both in the lab frame (`None` for every
+    /// other body, and when the model cannot compute them). Called when a trajectory frame is
+    /// written.
+    fn atoms(&self, _i: u32, _now: f64) -> Option<(Vec<DVec3>, Vec<DVec3>)> {
         None
     }
 

@@ -27,7 +27,7 @@
 //! generations are `u64`.
 
 use event_queue::QueueError;
-use glam::DVec3;
+use glam::{DQuat, DVec3};
 use rand::{RngExt, SeedableRng};
 use rand_distr::{Distribution, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;
@@ -225,6 +225,18 @@ pub struct View<'a> {
     pub rotational_kinetic: f64,
     /// Rotational degrees of freedom (included in `dof`; 0 for spheres).
     pub rotational_dof: f64,
+    /// Events of the current phase so far.
+    pub events: u64,
+    /// The attitude of every body now ([`PairModel::attitude`]: body → lab unit
+    /// quaternions), in a frame's view only; empty for models without attitudes.
+    pub attitudes: Vec<DQuat>,
+    /// The spin angular momentum `I ω` of every body with an attitude, lab frame
+    /// ([`PairModel::spin`]), in a frame's view only.
+    pub spins: Vec<DVec3>,
+    /// The atoms of every body without a rigid attitude ([`PairModel::atoms`]: lab positions
+    /// relative to the centre, lab velocities relative to the centre's), in a frame's view
+    /// only; empty for other models, shorter than `bodies` if the model could not give them.
+    pub atoms: Vec<(Vec<DVec3>, Vec<DVec3>)>,
 }
 
 impl View<'_> {
@@ -242,12 +254,16 @@ impl View<'_> {
     }
 }
 
+/// Streams of trajectory frames the loop schedules, each with its own interval (the driver
+/// gives stream 0 to `trajectory.xyz` and stream 1 to `trajectory.gsd`).
+pub const FRAME_STREAMS: usize = 2;
+
 /// Receives sampling events (observables, trajectory).
 pub trait Sampler {
     /// Samples the observables.
     fn sample(&mut self, _view: &View<'_>) {}
-    /// Writes a trajectory frame.
-    fn frame(&mut self, _view: &View<'_>) {}
+    /// Writes a trajectory frame of stream `stream` (`< FRAME_STREAMS`).
+    fn frame(&mut self, _stream: usize, _view: &View<'_>) {}
     /// Why the outputs cannot grow any further (checked after each sample and frame: the
     /// loop then stops with [`SimError::OutputLimit`]).
     fn over_budget(&self) -> Option<String> {
@@ -368,8 +384,9 @@ pub struct Simulation<M, S> {
     next_thermostat: f64,
     sample_dt: Option<f64>,
     next_sample: f64,
-    frame_dt: Option<f64>,
-    next_frame: f64,
+    /// Interval and next time of each stream of trajectory frames.
+    frame_dt: [Option<f64>; FRAME_STREAMS],
+    next_frame: [f64; FRAME_STREAMS],
     end: f64,
     settings: LoopSettings,
     since_rebase: u64,
@@ -538,8 +555,8 @@ where
             next_thermostat: f64::INFINITY,
             sample_dt: None,
             next_sample: f64::INFINITY,
-            frame_dt: None,
-            next_frame: f64::INFINITY,
+            frame_dt: [None; FRAME_STREAMS],
+            next_frame: [f64::INFINITY; FRAME_STREAMS],
             end: f64::INFINITY,
             settings,
             since_rebase: 0,
@@ -914,8 +931,10 @@ where
         if self.sample_dt.is_some() {
             t = t.min(self.next_sample);
         }
-        if self.frame_dt.is_some() {
-            t = t.min(self.next_frame);
+        for (dt, next) in self.frame_dt.iter().zip(self.next_frame) {
+            if dt.is_some() {
+                t = t.min(next);
+            }
         }
         if self.thermostat.is_some() {
             t = t.min(self.next_thermostat);
@@ -938,8 +957,10 @@ where
             SystemEvent::Thermostat
         } else if self.sample_dt.is_some() && self.next_sample <= t {
             SystemEvent::Sample
-        } else if self.frame_dt.is_some() && self.next_frame <= t {
-            SystemEvent::Frame
+        } else if let Some(k) =
+            (0..FRAME_STREAMS).find(|&k| self.frame_dt[k].is_some() && self.next_frame[k] <= t)
+        {
+            SystemEvent::Frame(k)
         } else {
             SystemEvent::End
         };
@@ -954,10 +975,10 @@ where
                 self.counters.samples += 1;
                 self.next_sample += self.sample_dt.unwrap_or(f64::INFINITY);
             }
-            SystemEvent::Frame => {
-                sampler.frame(&self.view());
+            SystemEvent::Frame(k) => {
+                sampler.frame(k, &self.frame_view());
                 self.counters.samples += 1;
-                self.next_frame += self.frame_dt.unwrap_or(f64::INFINITY);
+                self.next_frame[k] += self.frame_dt[k].unwrap_or(f64::INFINITY);
             }
             SystemEvent::Thermostat => {
                 self.thermostat_collision();
@@ -1163,7 +1184,9 @@ where
         self.phase.last_change -= t0;
         self.next_thermostat -= t0;
         self.next_sample -= t0;
-        self.next_frame -= t0;
+        for next in &mut self.next_frame {
+            *next -= t0;
+        }
         self.end -= t0;
         self.since_rebase = 0;
         self.counters.rebases += 1;
@@ -1188,12 +1211,26 @@ where
 
     /// Starts a new phase: resets the counters and accumulators, optionally removes the total
     /// momentum (after a thermostat), and schedules sampling every `sample_dt` and trajectory
-    /// frames every `frame_dt` from now on.
+    /// frames every `frame_dt` from now on (frame stream 0; the other streams off).
     pub fn begin_phase(
         &mut self,
         zero_momentum: bool,
         sample_dt: Option<f64>,
         frame_dt: Option<f64>,
+    ) {
+        let mut frames = [None; FRAME_STREAMS];
+        frames[0] = frame_dt;
+        self.begin_phase_with_frames(zero_momentum, sample_dt, frames);
+    }
+
+    /// [`begin_phase`](Self::begin_phase) with every stream of trajectory frames: stream `k`
+    /// every `frames[k]` from now on ([`Sampler::frame`] tells the sampler which stream is
+    /// due).
+    pub fn begin_phase_with_frames(
+        &mut self,
+        zero_momentum: bool,
+        sample_dt: Option<f64>,
+        frames: [Option<f64>; FRAME_STREAMS],
     ) {
         let now = self.now;
         if zero_momentum {
@@ -1219,8 +1256,8 @@ where
         };
         self.sample_dt = sample_dt;
         self.next_sample = now;
-        self.frame_dt = frame_dt;
-        self.next_frame = now;
+        self.frame_dt = frames;
+        self.next_frame = [now; FRAME_STREAMS];
         self.schedule_system();
     }
 
@@ -1277,6 +1314,34 @@ where
                 .collect(),
             rotational_kinetic: self.model.rotational_kinetic(),
             rotational_dof: self.model.rotational_dof(),
+            events: self.counters.events,
+            attitudes: Vec::new(),
+            spins: Vec::new(),
+            atoms: Vec::new(),
+        }
+    }
+
+    /// The view of a trajectory frame: [`view`](Self::view) with the attitudes, spins and
+    /// atoms that only frames need.
+    fn frame_view(&self) -> View<'_> {
+        let n = self.bodies.len() as u32;
+        let attitudes: Vec<DQuat> = (0..n)
+            .map_while(|i| self.model.attitude(i, self.now))
+            .collect();
+        let spins = if attitudes.is_empty() {
+            Vec::new()
+        } else {
+            (0..n)
+                .map(|i| self.model.spin(i, self.bodies[i as usize].species))
+                .collect()
+        };
+        View {
+            atoms: (0..n)
+                .map_while(|i| self.model.atoms(i, self.now))
+                .collect(),
+            attitudes,
+            spins,
+            ..self.view()
         }
     }
 

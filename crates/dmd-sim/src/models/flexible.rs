@@ -1539,6 +1539,12 @@ impl PairModel for Flexible {
         }
     }
 
+    /// The atoms on the RATTLE trajectory (`None` if its step failed: the loop reports the
+    /// failure itself).
+    fn atoms(&self, i: u32, now: f64) -> Option<(Vec<DVec3>, Vec<DVec3>)> {
+        self.internal_state(i, now).ok()
+    }
+
     fn spin(&self, i: u32, s: u32) -> DVec3 {
         let (q, u) = self.trajectories[i as usize].initial();
         self.types[s as usize]

@@ -1536,6 +1536,13 @@ impl PairModel for Sites {
         Some(self.pose(i, now).0.x_axis)
     }
 
+    /// The body frame is the principal frame of [`MoleculeType::sites`] (axis 1 of the
+    /// smallest moment, the axis of a linear molecule); the attitude is the free motion's
+    /// orientation.
+    fn attitude(&self, i: u32, now: f64) -> Option<DQuat> {
+        Some(DQuat::from_mat3(&self.pose(i, now).0).normalize())
+    }
+
     fn report(&self) -> Report {
         let mut r = Report::default();
         self.stats.report_into(&mut r);

@@ -42,7 +42,7 @@
 //! grid that examines every extremum, counting the roots the search stepped over.
 
 use collide::{LinearBody, Outcome, PairForce, Velocity, terrace};
-use glam::DVec3;
+use glam::{DQuat, DVec3};
 use potential::{FreeFlight, PairGeometry, PairPotential, PotentialError, TerraceMap};
 use rand_distr::{Distribution, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;
@@ -1081,6 +1081,13 @@ impl<P: PairPotential> PairModel for Terraced<P> {
     #[inline]
     fn axis(&self, i: u32, now: f64) -> Option<DVec3> {
         Some(self.rods[i as usize].axis(now))
+    }
+
+    /// A rod is a linear rotor: its body frame has z along the axis and no spin about it, so
+    /// its attitude is the shortest rotation taking the body z axis onto its axis.
+    fn attitude(&self, i: u32, now: f64) -> Option<DQuat> {
+        let axis = self.rods[i as usize].axis(now).normalize();
+        Some(DQuat::from_rotation_arc(DVec3::Z, axis))
     }
 
     fn report(&self) -> Report {

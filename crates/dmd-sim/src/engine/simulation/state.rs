@@ -30,7 +30,7 @@ use crate::engine::fault::Blindfold;
 use crate::engine::model::{Pair, PairModel};
 use crate::engine::neighbour::{self, NeighbourLists};
 use crate::engine::schedule::Scheduler;
-use crate::engine::simulation::{Andersen, Anomalies, Counters, LoopSettings};
+use crate::engine::simulation::{Andersen, Anomalies, Counters, FRAME_STREAMS, LoopSettings};
 use crate::engine::sum::Compensated;
 
 /// One body's record.
@@ -96,12 +96,12 @@ pub struct SimState {
     pub thermostat: Option<(f64, f64)>,
     /// The thermostat's generator.
     pub rng: Xoshiro256PlusPlus,
-    /// Timers: next thermostat collision, sample, frame, end.
-    pub timers: (f64, f64, f64, f64),
+    /// Timers: next thermostat collision, sample, frame of each stream, end.
+    pub timers: (f64, f64, [f64; FRAME_STREAMS], f64),
     /// Sampling and frame intervals.
     pub sample_dt: Option<f64>,
     /// See `sample_dt`.
-    pub frame_dt: Option<f64>,
+    pub frame_dt: [Option<f64>; FRAME_STREAMS],
     /// Loop settings: re-basing interval, seed, debug-check interval, skin, start time.
     pub settings: (u64, u64, u64, f64, f64),
     /// Events since the last debug check.
@@ -323,8 +323,8 @@ where
             next_thermostat: f64::INFINITY,
             sample_dt: None,
             next_sample: f64::INFINITY,
-            frame_dt: None,
-            next_frame: f64::INFINITY,
+            frame_dt: [None; FRAME_STREAMS],
+            next_frame: [f64::INFINITY; FRAME_STREAMS],
             end: f64::INFINITY,
             settings,
             since_rebase: 0,
@@ -465,7 +465,9 @@ where
         self.phase.last_change -= t0;
         self.next_thermostat -= t0;
         self.next_sample -= t0;
-        self.next_frame -= t0;
+        for next in &mut self.next_frame {
+            *next -= t0;
+        }
         self.end -= t0;
         self.since_rebase = 0;
     }
@@ -604,9 +606,12 @@ fn check_fits<M: PairModel>(
         return bad(format!("it has {} bodies, the scene {n}", s.bodies.len()));
     }
     let (a, b, c, d) = s.timers;
-    if [a, b, c, d].iter().any(|t| t.is_nan())
+    if [a, b, d].iter().chain(&c).any(|t| t.is_nan())
         || s.sample_dt.is_some_and(|x| !(x.is_finite() && x > 0.0))
-        || s.frame_dt.is_some_and(|x| !(x.is_finite() && x > 0.0))
+        || s.frame_dt
+            .iter()
+            .flatten()
+            .any(|&x| !(x.is_finite() && x > 0.0))
         || !(s.now.is_finite() && s.kinetic.is_finite() && s.potential.is_finite())
         || s.settings.0 == 0
     {
