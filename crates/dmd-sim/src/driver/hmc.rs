@@ -24,8 +24,8 @@
 //! reversible and volume preserving, so with exact event times every segment is accepted
 //! (`ΔH` is round-off) and the chain is plain molecular dynamics with momentum refreshes.
 //!
-//! **Fault injection** (scene key `hmc.fault_fraction`, the loop's
-//! [`Blindfold`](crate::engine::fault::Blindfold)) is a validation tool: the
+//! **Fault injection** (scene key `hmc.fault_fraction`, the loop's `Blindfold`, set with
+//! [`Simulation::set_fault_fraction`]) is a validation tool: the
 //! sphere engine's event times are analytic and it misses nothing, so to show that HMC
 //! repairs misses, misses are made deliberately. In each segment a pseudo-random fraction of
 //! the pairs (drawn afresh per segment from the seed) is *blind*: none of its events is

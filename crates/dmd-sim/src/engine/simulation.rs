@@ -1535,7 +1535,7 @@ where
 
     /// Hides about `fraction` of the pairs from every event prediction in each HMC segment,
     /// drawn afresh per segment from `seed` (fault injection, a validation tool of HMC; see
-    /// [`Blindfold`]). Nothing is hidden before the first [`begin_segment`](Self::begin_segment).
+    /// the `engine::fault` module). Nothing is hidden before the first [`begin_segment`](Self::begin_segment).
     pub fn set_fault_fraction(&mut self, fraction: f64, seed: u64) {
         self.blindfold = Blindfold::new(fraction, seed);
     }
