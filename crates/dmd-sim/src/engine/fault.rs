@@ -34,6 +34,12 @@ impl Blindfold {
         self.active = self.threshold > 0;
     }
 
+    /// Whether any pair is hidden in the present segment.
+    #[inline(always)]
+    pub(crate) fn is_active(&self) -> bool {
+        self.active
+    }
+
     /// Whether pair `(i, j)` is hidden in the present segment.
     #[inline(always)]
     pub(crate) fn hides(&self, i: u32, j: u32) -> bool {

@@ -1068,6 +1068,20 @@ where
     /// time it leaves its skin into `i`'s list; returns the earliest time.
     #[inline]
     fn predict(&mut self, i: u32, skip: Skip) -> f64 {
+        // Two copies of the partner loop: without fault injection (every ordinary run) the
+        // loop has no test for hidden pairs at all, whose never-taken call would otherwise
+        // keep the loop's vectors out of registers (measured: +3 % instructions per event on
+        // hard spheres).
+        if self.blindfold.is_active() {
+            self.predict_partners::<true>(i, skip)
+        } else {
+            self.predict_partners::<false>(i, skip)
+        }
+    }
+
+    /// [`predict`](Self::predict), hiding the blindfolded pairs if `HIDE`.
+    #[inline(always)]
+    fn predict_partners<const HIDE: bool>(&mut self, i: u32, skip: Skip) -> f64 {
         let now = self.now;
         let bi = self.bodies[i as usize];
         let ri = bi.position_at(now);
@@ -1087,7 +1101,7 @@ where
         let mut earliest = f64::INFINITY;
         for &e in nbrs.of(i) {
             let j = neighbour::partner(e);
-            if j == other || (lower && j < i) || blindfold.hides(i, j) {
+            if j == other || (lower && j < i) || (HIDE && blindfold.hides(i, j)) {
                 continue;
             }
             let bj = &bodies[j as usize];
