@@ -41,10 +41,12 @@
 //! [`SearchSettings::verify_step`] every search interval is searched again on a fine uniform
 //! grid that examines every extremum, counting the roots the search stepped over.
 
-use collide::{LinearBody, Outcome, PairForce, Velocity, terrace};
+use collide::{Outcome, PairForce, Velocity, terrace};
 use glam::{DQuat, DVec3};
-use potential::{FreeFlight, PairGeometry, PairPotential, PotentialError, TerraceMap};
-use rand_distr::{Distribution, StandardNormal};
+use potential::{
+    FreeFlight, PairEval, PairGeometry, PairPotential, PotentialError, RigidGeometry,
+    RigidPairPotential, TaylorModel, TerraceMap,
+};
 use rand_xoshiro::Xoshiro256PlusPlus;
 use rigid_free::LinearRotor;
 use root_search::{Adaptive, Crossing, Grid, Method, SearchError, SearchState};
@@ -52,21 +54,155 @@ use root_search::{Adaptive, Crossing, Grid, Method, SearchError, SearchState};
 use crate::engine::event::{Boundary, Kind};
 use crate::engine::model::{Executed, Pair, PairClass, PairModel, PairSetupError, Report};
 use crate::engine::pair_state::{PairStates, SavedSearches};
+use crate::models::rotor::{Rotor, Top};
 use crate::models::search::{
     SearchMethod, SearchSettings, SearchStats, bracket, jitter_factor, mix,
 };
 
-/// One rod's free rotation since its last change at time `t`.
+/// One body's free rotation since its last change at time `t`.
 #[derive(Clone, Copy, Debug, PartialEq)]
-struct Rod {
-    rotor: LinearRotor,
+struct Anchored<R> {
+    rotor: R,
     t: f64,
 }
 
-impl Rod {
+impl<R: Rotor> Anchored<R> {
     #[inline(always)]
-    fn axis(&self, now: f64) -> DVec3 {
-        self.rotor.axis(now - self.t)
+    fn pose(&self, now: f64) -> R::Pose {
+        self.rotor.pose(now - self.t)
+    }
+
+    #[inline(always)]
+    fn pose_omega(&self, now: f64) -> (R::Pose, DVec3) {
+        self.rotor.pose_omega(now - self.t)
+    }
+}
+
+/// A smooth pair potential as the terraced model reads it: energy, force and torques for two
+/// bodies' poses, its minimum and reaches, and optionally a certified Taylor model along the
+/// free flight (`potential::certify`). Every uniaxial [`PairPotential`] is one, on rods
+/// ([`LinearRotor`]); a [`RigidPairPotential`] becomes one on [`Top`]s through [`Rigid`].
+pub trait TerracedPotential {
+    /// The rotation of the bodies this potential acts between.
+    type Rotor: Rotor;
+
+    /// `U`, force on `i` and both torques for separation `r = r_i − r_j` and poses `a`, `b`.
+    ///
+    /// # Errors
+    /// As [`PairPotential::evaluate`].
+    fn evaluate(
+        &self,
+        r: DVec3,
+        a: &Pose<Self>,
+        b: &Pose<Self>,
+    ) -> Result<PairEval, PotentialError>;
+
+    /// `U` alone (`+∞` inside the core).
+    fn energy(&self, r: DVec3, a: &Pose<Self>, b: &Pose<Self>) -> f64;
+
+    /// A lower bound on `U` (exact where the potential knows it).
+    fn minimum(&self) -> f64;
+
+    /// An upper bound on the centre distance at which `U` can reach level `u`.
+    ///
+    /// # Errors
+    /// As [`PairPotential::reach`].
+    fn reach(&self, u: f64) -> Result<f64, PotentialError>;
+
+    /// The band `[lo, hi)` of `U` in the potential's effective coordinate (empty: none).
+    fn coordinate_intervals(&self, lo: f64, hi: f64) -> Vec<(f64, f64)> {
+        let _ = (lo, hi);
+        Vec::new()
+    }
+
+    /// A Taylor model over `h` of the effective coordinate for centres at `r` moving apart at
+    /// `v` and the rotations `a`, `b` each `dt` after its anchor (none: no certified jumps).
+    fn taylor_model(
+        &self,
+        r: DVec3,
+        v: DVec3,
+        a: (&Self::Rotor, f64),
+        b: (&Self::Rotor, f64),
+        h: f64,
+    ) -> Option<TaylorModel> {
+        let _ = (r, v, a, b, h);
+        None
+    }
+}
+
+/// The pose type of a terraced potential's bodies.
+pub type Pose<P> = <<P as TerracedPotential>::Rotor as Rotor>::Pose;
+
+impl<P: PairPotential> TerracedPotential for P {
+    type Rotor = LinearRotor;
+
+    #[inline(always)]
+    fn evaluate(&self, r: DVec3, a: &DVec3, b: &DVec3) -> Result<PairEval, PotentialError> {
+        PairPotential::evaluate(self, &PairGeometry::new(r, *a, *b))
+    }
+
+    #[inline(always)]
+    fn energy(&self, r: DVec3, a: &DVec3, b: &DVec3) -> f64 {
+        PairPotential::energy(self, &PairGeometry::new(r, *a, *b))
+    }
+
+    fn minimum(&self) -> f64 {
+        PairPotential::minimum(self)
+    }
+
+    fn reach(&self, u: f64) -> Result<f64, PotentialError> {
+        PairPotential::reach(self, u)
+    }
+
+    fn coordinate_intervals(&self, lo: f64, hi: f64) -> Vec<(f64, f64)> {
+        PairPotential::coordinate_intervals(self, lo, hi)
+    }
+
+    #[inline(always)]
+    fn taylor_model(
+        &self,
+        r: DVec3,
+        v: DVec3,
+        (ri, ti): (&LinearRotor, f64),
+        (rj, tj): (&LinearRotor, f64),
+        h: f64,
+    ) -> Option<TaylorModel> {
+        let flight = FreeFlight {
+            r,
+            v,
+            s_i: ri.axis(ti),
+            w_i: ri.omega(),
+            s_j: rj.axis(tj),
+            w_j: rj.omega(),
+            spin: ri.rate() + rj.rate(),
+        };
+        PairPotential::taylor_model(self, &flight, h)
+    }
+}
+
+/// A [`RigidPairPotential`] between [`Top`]s: bodies of any shape on terraces.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Rigid<P>(pub P);
+
+impl<P: RigidPairPotential> TerracedPotential for Rigid<P> {
+    type Rotor = Top;
+
+    #[inline]
+    fn evaluate(&self, r: DVec3, a: &DQuat, b: &DQuat) -> Result<PairEval, PotentialError> {
+        self.0.evaluate(&RigidGeometry::new(r, *a, *b))
+    }
+
+    #[inline]
+    fn energy(&self, r: DVec3, a: &DQuat, b: &DQuat) -> f64 {
+        self.0.energy(&RigidGeometry::new(r, *a, *b))
+    }
+
+    fn minimum(&self) -> f64 {
+        self.0.minimum()
+    }
+
+    fn reach(&self, u: f64) -> Result<f64, PotentialError> {
+        self.0.reach(u)
     }
 }
 
@@ -165,7 +301,7 @@ pub enum ModelError {
     },
 }
 
-impl<P: PairPotential> PairTerraces<P> {
+impl<P: TerracedPotential> PairTerraces<P> {
     /// The terraces of `map` on `potential`, with the reach of every band (so that a pair
     /// deep in the well is bracketed by the reach of its own terrace's levels).
     ///
@@ -192,7 +328,14 @@ impl<P: PairPotential> PairTerraces<P> {
         }
         let levels = map.levels().to_vec();
         let core = map.core();
-        let outer = map.reach(&potential).map_err(ModelError::Reach)? * (1.0 + 1e-12);
+        // The reach of the outermost levels around the zero terrace (as `TerraceMap::reach`).
+        let zero = map.zero_terrace();
+        let above = levels.get(zero).copied().unwrap_or(core);
+        let mut outer = potential.reach(above).map_err(ModelError::Reach)?;
+        if let Some(&u) = levels[..zero].last() {
+            outer = outer.max(potential.reach(u).map_err(ModelError::Reach)?);
+        }
+        let outer = outer * (1.0 + 1e-12);
         // Reach of every level, and of the core; a tiny pad covers round-off of the bracket.
         let mut level_reach = Vec::with_capacity(levels.len() + 1);
         for &u in levels.iter().chain(std::iter::once(&core)) {
@@ -297,10 +440,9 @@ enum Pending {
 /// crossing may be near: the root search takes over), or after 32 models. Returns the time
 /// reached and the models evaluated (0 for a potential without a model).
 #[inline]
-fn certified_jump<P: PairPotential>(
-    pot: &P,
+fn certified_jump(
     band: &Band,
-    flight: impl Fn(f64) -> FreeFlight,
+    model_at: impl Fn(f64, f64) -> Option<TaylorModel>,
     mut t: f64,
     limit: f64,
     min_jump: f64,
@@ -309,7 +451,7 @@ fn certified_jump<P: PairPotential>(
     let mut ends: Option<(f64, f64)> = None;
     while t < limit && models < 32 {
         let h = limit - t;
-        let Some(m) = pot.taylor_model(&flight(t), h) else {
+        let Some(m) = model_at(t, h) else {
             break;
         };
         models += 1;
@@ -379,28 +521,34 @@ fn debug_miss(
     }
 }
 
-/// Mass and moment of inertia (about any axis through the centre perpendicular to the rod's
-/// own) of one species of rods.
+/// Mass and rotational inertia of one species of terraced bodies.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct RodSpecies {
+pub struct BodySpecies<I> {
     /// Mass.
     pub mass: f64,
-    /// Moment of inertia `I₁ = I₂`.
-    pub inertia: f64,
+    /// The rotational inertia: a rod's moment `I₁ = I₂` about axes perpendicular to its own,
+    /// a top's principal moments.
+    pub inertia: I,
 }
+
+/// A species of rods.
+pub type RodSpecies = BodySpecies<f64>;
+
+/// The species of the bodies of terraced potential `P`.
+pub type SpeciesOf<P> = BodySpecies<<<P as TerracedPotential>::Rotor as Rotor>::Inertia>;
 
 /// A species-pair table: the two species and their terraced potential.
 pub type PairTable<P> = ((usize, usize), PairTerraces<P>);
 
-/// Rigid rods on terraced pair potentials (module documentation).
+/// Rigid bodies on terraced pair potentials (module documentation).
 #[derive(Clone, Debug)]
-pub struct Terraced<P> {
+pub struct Terraced<P: TerracedPotential> {
     n_species: usize,
     table: Vec<u32>,
     pairs: Vec<PairTerraces<P>>,
-    species: Vec<RodSpecies>,
+    species: Vec<SpeciesOf<P>>,
     body_species: Vec<u32>,
-    rods: Vec<Rod>,
+    rods: Vec<Anchored<P::Rotor>>,
     states: PairStates,
     pending: SavedSearches<Pending>,
     settings: SearchSettings,
@@ -412,7 +560,7 @@ pub struct Terraced<P> {
     reach: f64,
 }
 
-impl<P: PairPotential> Terraced<P> {
+impl<P: TerracedPotential> Terraced<P> {
     /// Counters of this model's root searches so far.
     pub fn search_stats(&self) -> SearchStats {
         self.stats
@@ -428,10 +576,10 @@ impl<P: PairPotential> Terraced<P> {
     /// [`ModelError`].
     #[allow(clippy::too_many_arguments)]
     pub fn new(
-        species: Vec<RodSpecies>,
+        species: Vec<SpeciesOf<P>>,
         pairs: Vec<PairTable<P>>,
         body_species: &[u32],
-        axes: &[DVec3],
+        poses: &[Pose<P>],
         omegas: &[DVec3],
         t0: f64,
         settings: SearchSettings,
@@ -439,14 +587,17 @@ impl<P: PairPotential> Terraced<P> {
     ) -> Result<Self, ModelError> {
         let ns = species.len();
         for (k, s) in species.iter().enumerate() {
-            for (what, value) in [("mass", s.mass), ("inertia", s.inertia)] {
-                if !(value.is_finite() && value > 0.0) {
-                    return Err(ModelError::Species {
-                        species: k,
-                        what,
-                        value,
-                    });
-                }
+            let mass = if s.mass.is_finite() && s.mass > 0.0 {
+                Ok(())
+            } else {
+                Err(("mass", s.mass))
+            };
+            if let Err((what, value)) = mass.and_then(|()| P::Rotor::check(&s.inertia)) {
+                return Err(ModelError::Species {
+                    species: k,
+                    what,
+                    value,
+                });
             }
         }
         let mut table = vec![u32::MAX; ns * ns];
@@ -464,25 +615,6 @@ impl<P: PairPotential> Terraced<P> {
             return Err(ModelError::MissingPair(k / ns, k % ns));
         }
         let reach = tables.iter().map(|t| t.reach).fold(0.0, f64::max);
-        let rods = axes
-            .iter()
-            .zip(omegas)
-            .enumerate()
-            .map(|(i, (&s, &w))| {
-                LinearRotor::new(s, w)
-                    .map(|rotor| Rod { rotor, t: t0 })
-                    .map_err(|e| ModelError::Rotor {
-                        body: i,
-                        problem: e.to_string(),
-                    })
-            })
-            .collect::<Result<Vec<_>, _>>()?;
-        let adaptive = Adaptive::new(settings.max_step).map_err(ModelError::Search)?;
-        let threshold = match settings.method {
-            SearchMethod::Grid { threshold } => threshold,
-            SearchMethod::Adaptive => 0.0,
-        };
-        Grid::new(settings.max_step, threshold).map_err(ModelError::Search)?;
         if let Some((i, &s)) = body_species
             .iter()
             .enumerate()
@@ -493,6 +625,23 @@ impl<P: PairPotential> Terraced<P> {
                 problem: format!("species {s} does not exist"),
             });
         }
+        let rods = poses
+            .iter()
+            .zip(omegas)
+            .zip(body_species)
+            .enumerate()
+            .map(|(i, ((&pose, &w), &s))| {
+                P::Rotor::start(&species[s as usize].inertia, pose, w)
+                    .map(|rotor| Anchored { rotor, t: t0 })
+                    .map_err(|problem| ModelError::Rotor { body: i, problem })
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let adaptive = Adaptive::new(settings.max_step).map_err(ModelError::Search)?;
+        let threshold = match settings.method {
+            SearchMethod::Grid { threshold } => threshold,
+            SearchMethod::Adaptive => 0.0,
+        };
+        Grid::new(settings.max_step, threshold).map_err(ModelError::Search)?;
         assert_eq!(body_species.len(), rods.len(), "one species per body");
         if settings.window.is_nan() || settings.window <= 0.0 {
             return Err(ModelError::Search(SearchError::BadSetting {
@@ -571,12 +720,11 @@ impl<P: PairPotential> Terraced<P> {
 
     /// `U` of pair `(i, j)` at `now` and separation `dr` (tests and checks).
     pub fn energy(&self, i: u32, j: u32, si: u32, sj: u32, now: f64, dr: DVec3) -> f64 {
-        let g = PairGeometry::new(
-            dr,
-            self.rods[i as usize].axis(now),
-            self.rods[j as usize].axis(now),
+        let (a, b) = (
+            self.rods[i as usize].pose(now),
+            self.rods[j as usize].pose(now),
         );
-        self.pair(si, sj).potential.energy(&g)
+        self.pair(si, sj).potential.energy(dr, &a, &b)
     }
 
     /// Runs (or continues) the search of pair `(i, j)` on terrace `k` from `from`.
@@ -596,13 +744,12 @@ impl<P: PairPotential> Terraced<P> {
         let pt = &self.pairs[self.table[si as usize * self.n_species + sj as usize] as usize];
         let band = pt.bands[k as usize];
         let (ri, rj) = (&self.rods[i as usize], &self.rods[j as usize]);
-        let (wi, wj) = (ri.rotor.omega(), rj.rotor.omega());
         let pot = &pt.potential;
         let clamp = pt.clamp;
         // U and U̇ (003 Eq. 12) at time t, U clamped deep inside the core.
         let pair_at = |t: f64| -> (f64, f64) {
-            let g = PairGeometry::new(dr + dv * (t - now), ri.axis(t), rj.axis(t));
-            match pot.evaluate(&g) {
+            let ((a, wi), (b, wj)) = (ri.pose_omega(t), rj.pose_omega(t));
+            match pot.evaluate(dr + dv * (t - now), &a, &b) {
                 Ok(e) if e.energy < clamp => (e.energy, e.rate(dv, wi, wj)),
                 _ => (clamp, 0.0),
             }
@@ -616,20 +763,18 @@ impl<P: PairPotential> Terraced<P> {
                 Pending::Resume(s, _) => (s.time(), s.end()),
             };
             let limit = (t_start + self.settings.horizon).min(end);
-            let spin = ri.rotor.rate() + rj.rotor.rate();
-            let flight = |t: f64| FreeFlight {
-                r: dr + dv * (t - now),
-                v: dv,
-                s_i: ri.axis(t),
-                w_i: wi,
-                s_j: rj.axis(t),
-                w_j: wj,
-                spin,
+            let model_at = |t: f64, h: f64| {
+                pot.taylor_model(
+                    dr + dv * (t - now),
+                    dv,
+                    (&ri.rotor, t - ri.t),
+                    (&rj.rotor, t - rj.t),
+                    h,
+                )
             };
             let (t, models) = certified_jump(
-                pot,
                 &band,
-                flight,
+                model_at,
                 t_start,
                 limit,
                 0.05 * self.settings.max_step,
@@ -756,8 +901,8 @@ impl<P: PairPotential> Terraced<P> {
                 let boundary = if band.inv_width == 0.0 {
                     Boundary::Inner
                 } else {
-                    let g = PairGeometry::new(dr + dv * (r.t - now), ri.axis(r.t), rj.axis(r.t));
-                    let u = pot.energy(&g).min(clamp);
+                    let (a, b) = (ri.pose(r.t), rj.pose(r.t));
+                    let u = pot.energy(dr + dv * (r.t - now), &a, &b).min(clamp);
                     if u > 0.5 * (band.lo + band.hi) {
                         Boundary::Inner
                     } else {
@@ -779,7 +924,7 @@ impl<P: PairPotential> Terraced<P> {
     }
 }
 
-impl<P: PairPotential> PairModel for Terraced<P> {
+impl<P: TerracedPotential> PairModel for Terraced<P> {
     fn reach(&self) -> f64 {
         self.reach
     }
@@ -897,15 +1042,14 @@ impl<P: PairPotential> PairModel for Terraced<P> {
         let k = pt.terrace(v);
         let band = pt.bands[k as usize];
         let (ri, rj) = (self.rods[i as usize], self.rods[j as usize]);
-        let (ai, aj) = (ri.axis(now), rj.axis(now));
-        let (wi, wj) = (ri.rotor.omega(), rj.rotor.omega());
+        let ((ai, wi), (aj, wj)) = (ri.pose_omega(now), rj.pose_omega(now));
         let skipped = |overlap| Executed {
             class: PairClass::Skipped,
             delta_u: 0.0,
             virial: 0.0,
             overlap,
         };
-        let Ok(e) = pt.potential.evaluate(&PairGeometry::new(dr, ai, aj)) else {
+        let Ok(e) = pt.potential.evaluate(dr, &ai, &aj) else {
             // Deep inside the core (beyond binary64): the terraces were stepped over.
             return Ok(skipped(true));
         };
@@ -927,8 +1071,8 @@ impl<P: PairPotential> PairModel for Terraced<P> {
         }
         let spi = self.species[si as usize];
         let spj = self.species[sj as usize];
-        let bi = LinearBody::new(spi.mass, spi.inertia, ai)?;
-        let bj = LinearBody::new(spj.mass, spj.inertia, aj)?;
+        let bi = P::Rotor::body(spi.mass, &spi.inertia, &ai)?;
+        let bj = P::Rotor::body(spj.mass, &spj.inertia, &aj)?;
         let out = terrace(
             &bi,
             &bj,
@@ -939,13 +1083,13 @@ impl<P: PairPotential> PairModel for Terraced<P> {
         )?;
         *vi = out.i.linear;
         *vj = out.j.linear;
-        let rod = |axis, omega| -> Result<Rod, collide::CollideError> {
-            LinearRotor::new(axis, omega)
-                .map(|rotor| Rod { rotor, t: now })
+        let rod = |inertia, pose, omega| -> Result<Anchored<P::Rotor>, collide::CollideError> {
+            P::Rotor::start(inertia, pose, omega)
+                .map(|rotor| Anchored { rotor, t: now })
                 .map_err(|_| collide::CollideError::NotFinite("angular velocity after the impulse"))
         };
-        self.rods[i as usize] = rod(ai, out.i.angular)?;
-        self.rods[j as usize] = rod(aj, out.j.angular)?;
+        self.rods[i as usize] = rod(&spi.inertia, ai, out.i.angular)?;
+        self.rods[j as usize] = rod(&spj.inertia, aj, out.j.angular)?;
         let class = match (out.impulse.outcome, boundary) {
             (Outcome::Reflected, Boundary::Inner) if step == f64::INFINITY => PairClass::Core,
             (Outcome::Reflected, _) => PairClass::StepReflect,
@@ -1023,11 +1167,11 @@ impl<P: PairPotential> PairModel for Terraced<P> {
     }
 
     fn rebase(&mut self, t0: f64) {
-        // Re-anchor every rotor at the new origin, so that rotation angles stay small.
-        for r in &mut self.rods {
-            if let Ok(rotor) = LinearRotor::new(r.axis(t0), r.rotor.omega()) {
-                r.rotor = rotor;
-                r.t = 0.0;
+        // Re-anchor every rotation at the new origin, so that rotation angles stay small.
+        for (r, &s) in self.rods.iter_mut().zip(&self.body_species) {
+            let (pose, omega) = r.pose_omega(t0);
+            if let Ok(rotor) = P::Rotor::start(&self.species[s as usize].inertia, pose, omega) {
+                *r = Anchored { rotor, t: 0.0 };
             } else {
                 // Not finite (a broken invariant, reported elsewhere): keep the old anchor.
                 r.t -= t0;
@@ -1038,13 +1182,13 @@ impl<P: PairPotential> PairModel for Terraced<P> {
     fn rotational_kinetic(&self) -> f64 {
         let mut k = crate::engine::sum::Compensated::ZERO;
         for (r, s) in self.rods.iter().zip(self.body_species()) {
-            k.add(0.5 * self.species[s as usize].inertia * r.rotor.omega().length_squared());
+            k.add(r.rotor.kinetic(&self.species[s as usize].inertia));
         }
         k.value()
     }
 
     fn rotational_dof(&self) -> f64 {
-        2.0 * self.rods.len() as f64
+        P::Rotor::DOF * self.rods.len() as f64
     }
 
     fn thermalize(
@@ -1055,22 +1199,23 @@ impl<P: PairPotential> PairModel for Terraced<P> {
         kt: f64,
         rng: &mut Xoshiro256PlusPlus,
     ) -> f64 {
-        let inertia = self.species[s as usize].inertia;
+        let inertia = &self.species[s as usize].inertia;
         let r = self.rods[i as usize];
-        let axis = r.axis(now);
-        let w = draw_omega(axis, inertia, kt, rng);
-        let Ok(rotor) = LinearRotor::new(axis, w) else {
+        let pose = r.pose(now);
+        let w = P::Rotor::draw(inertia, pose, kt, rng);
+        let Ok(rotor) = P::Rotor::start(inertia, pose, w) else {
             return 0.0;
         };
-        let dk =
-            0.5 * inertia * (rotor.omega().length_squared() - r.rotor.omega().length_squared());
-        self.rods[i as usize] = Rod { rotor, t: now };
+        let dk = rotor.kinetic(inertia) - r.rotor.kinetic(inertia);
+        self.rods[i as usize] = Anchored { rotor, t: now };
         dk
     }
 
     #[inline]
     fn spin(&self, i: u32, s: u32) -> DVec3 {
-        self.species[s as usize].inertia * self.rods[i as usize].rotor.omega()
+        self.rods[i as usize]
+            .rotor
+            .momentum(&self.species[s as usize].inertia)
     }
 
     #[inline]
@@ -1078,16 +1223,17 @@ impl<P: PairPotential> PairModel for Terraced<P> {
         self.rods[i as usize].rotor.omega()
     }
 
+    /// A rod's axis; a top's body `ẑ` (the dipole of the water models).
     #[inline]
     fn axis(&self, i: u32, now: f64) -> Option<DVec3> {
-        Some(self.rods[i as usize].axis(now))
+        Some(P::Rotor::axis(&self.rods[i as usize].pose(now)))
     }
 
     /// A rod is a linear rotor: its body frame has z along the axis and no spin about it, so
-    /// its attitude is the shortest rotation taking the body z axis onto its axis.
+    /// its attitude is the shortest rotation taking the body z axis onto its axis. A top's
+    /// body frame is its principal frame.
     fn attitude(&self, i: u32, now: f64) -> Option<DQuat> {
-        let axis = self.rods[i as usize].axis(now).normalize();
-        Some(DQuat::from_rotation_arc(DVec3::Z, axis))
+        Some(P::Rotor::attitude(&self.rods[i as usize].pose(now)))
     }
 
     fn report(&self) -> Report {
@@ -1154,30 +1300,37 @@ impl<P: PairPotential> PairModel for Terraced<P> {
 
     fn draw_rotations(&mut self, now: f64, temperature: f64, rng: &mut Xoshiro256PlusPlus) {
         for (r, &s) in self.rods.iter_mut().zip(&self.body_species) {
-            let axis = r.axis(now);
-            let w = draw_omega(axis, self.species[s as usize].inertia, temperature, rng);
-            if let Ok(rotor) = LinearRotor::new(axis, w) {
-                *r = Rod { rotor, t: now };
+            let inertia = &self.species[s as usize].inertia;
+            let pose = r.pose(now);
+            let w = P::Rotor::draw(inertia, pose, temperature, rng);
+            if let Ok(rotor) = P::Rotor::start(inertia, pose, w) {
+                *r = Anchored { rotor, t: now };
             }
         }
     }
 
     fn reverse_rotations(&mut self) {
-        // HMC reverses at a re-basing (present time 0), where every rod is anchored: there the
-        // reversal is exact, the axis stays and turns back the way it came.
-        for r in &mut self.rods {
-            if r.t == 0.0 {
-                r.rotor = r.rotor.reversed();
-            } else if let Ok(rotor) = LinearRotor::new(r.axis(0.0), -r.rotor.omega()) {
-                *r = Rod { rotor, t: 0.0 };
+        // HMC reverses at a re-basing (present time 0), where every body is anchored: there the
+        // reversal is exact, the body turns back the way it came.
+        for (r, &s) in self.rods.iter_mut().zip(&self.body_species) {
+            let inertia = &self.species[s as usize].inertia;
+            let reversed = if r.t == 0.0 {
+                r.rotor.reversed(inertia)
+            } else {
+                let (pose, omega) = r.pose_omega(0.0);
+                P::Rotor::start(inertia, pose, -omega)
+            };
+            if let Ok(rotor) = reversed {
+                *r = Anchored { rotor, t: 0.0 };
             }
         }
     }
 
     fn extra_state(&self) -> Vec<f64> {
-        let mut x = Vec::with_capacity(ROD_NUMBERS * self.rods.len() + STATS_NUMBERS);
+        let per_body = P::Rotor::PARTS + 1;
+        let mut x = Vec::with_capacity(per_body * self.rods.len() + STATS_NUMBERS);
         for r in &self.rods {
-            x.extend_from_slice(&r.rotor.to_parts());
+            r.rotor.write(&mut x);
             x.push(r.t);
         }
         for c in self.stats.counts() {
@@ -1190,23 +1343,28 @@ impl<P: PairPotential> PairModel for Terraced<P> {
 
     fn set_extra_state(&mut self, state: &[f64]) -> Result<(), String> {
         let n = self.rods.len();
-        if state.len() != ROD_NUMBERS * n + STATS_NUMBERS {
+        let per_body = P::Rotor::PARTS + 1;
+        if state.len() != per_body * n + STATS_NUMBERS {
             return Err(format!(
-                "the rods' state has {} numbers, {n} rods need {}",
+                "the bodies' state has {} numbers, {n} bodies need {}",
                 state.len(),
-                ROD_NUMBERS * n + STATS_NUMBERS
+                per_body * n + STATS_NUMBERS
             ));
         }
-        let (rods, counts) = state.split_at(ROD_NUMBERS * n);
+        let (rods, counts) = state.split_at(per_body * n);
         let mut restored = Vec::with_capacity(n);
-        for (i, x) in rods.chunks_exact(ROD_NUMBERS).enumerate() {
-            let parts: [f64; 10] = x[..10].try_into().expect("chunks of ROD_NUMBERS");
-            let rotor = LinearRotor::from_parts(parts)
-                .map_err(|e| format!("rod {i} cannot be restored: {e}"))?;
-            if !x[10].is_finite() {
-                return Err(format!("rod {i} has a non-finite clock"));
+        for ((i, x), &s) in rods
+            .chunks_exact(per_body)
+            .enumerate()
+            .zip(&self.body_species)
+        {
+            let (parts, t) = x.split_at(P::Rotor::PARTS);
+            let rotor = P::Rotor::read(&self.species[s as usize].inertia, parts)
+                .map_err(|e| format!("body {i} cannot be restored: {e}"))?;
+            if !t[0].is_finite() {
+                return Err(format!("body {i} has a non-finite clock"));
             }
-            restored.push(Rod { rotor, t: x[10] });
+            restored.push(Anchored { rotor, t: t[0] });
         }
         let mut c = [0u64; STATS_NUMBERS / 2];
         for (k, h) in counts.chunks_exact(2).enumerate() {
@@ -1222,24 +1380,25 @@ impl<P: PairPotential> PairModel for Terraced<P> {
     }
 
     fn scale_rotations(&mut self, now: f64, factor: f64) {
-        // Each rotor restarts at `now` from its present axis with the scaled angular velocity
-        // (a linear rotor's ω stays perpendicular to its axis, so the scaled one is a valid
-        // state and its energy is exactly factor² times the old one up to round-off).
-        for r in &mut self.rods {
-            if let Ok(rotor) = LinearRotor::new(r.axis(now), factor * r.rotor.omega()) {
-                *r = Rod { rotor, t: now };
+        // Each rotation restarts at `now` from its present pose with the scaled angular
+        // velocity (a linear rotor's ω stays perpendicular to its axis, a top's keeps its
+        // direction in the body, so the energy is exactly factor² times the old one up to
+        // round-off).
+        for (r, &s) in self.rods.iter_mut().zip(&self.body_species) {
+            let (pose, omega) = r.pose_omega(now);
+            if let Ok(rotor) =
+                P::Rotor::start(&self.species[s as usize].inertia, pose, factor * omega)
+            {
+                *r = Anchored { rotor, t: now };
             }
         }
     }
 }
 
-/// Numbers per rod in [`PairModel::extra_state`]: the rotor's parts and its clock.
-const ROD_NUMBERS: usize = 11;
-
 /// Numbers of the search counters in [`PairModel::extra_state`] (two per counter).
 const STATS_NUMBERS: usize = 24;
 
-impl<P> Terraced<P> {
+impl<P: TerracedPotential> Terraced<P> {
     /// Species of every body.
     fn body_species(&self) -> impl Iterator<Item = u32> + '_ {
         self.body_species.iter().copied()
@@ -1249,13 +1408,7 @@ impl<P> Terraced<P> {
 /// A lab angular velocity for a rod with axis `axis` drawn from equipartition at `kt`: each of
 /// the two components perpendicular to the axis Gaussian with variance `kT / I`.
 pub fn draw_omega(axis: DVec3, inertia: f64, kt: f64, rng: &mut Xoshiro256PlusPlus) -> DVec3 {
-    let g = DVec3::new(
-        StandardNormal.sample(rng),
-        StandardNormal.sample(rng),
-        StandardNormal.sample(rng),
-    ) * (kt / inertia).sqrt();
-    let s = axis.normalize();
-    g - s * s.dot(g)
+    <LinearRotor as Rotor>::draw(&inertia, axis, kt, rng)
 }
 
 /// The terraces of an isotropic potential as the radial steps of a stepped potential: the
@@ -1336,7 +1489,7 @@ mod tests {
             for level in [b.lo, b.hi] {
                 if level.is_finite() {
                     assert!(
-                        rod.reach(level).unwrap() <= b.reach,
+                        PairPotential::reach(&rod, level).unwrap() <= b.reach,
                         "terrace {k}, level {level}"
                     );
                 }
