@@ -63,6 +63,8 @@ fn energy_scale(scene: &Scene) -> Option<f64> {
             Some(epsilon.abs())
         }
         Some(PotentialSpec::GayBerne { epsilon0, .. }) => Some(epsilon0.abs()),
+        // The Lennard-Jones well of SSD/E, the smallest of its energies (kJ/mol).
+        Some(PotentialSpec::SsdE { .. }) => Some(potential::SsdParameters::SSD_E.epsilon),
         None => None,
     });
     steps
@@ -202,8 +204,12 @@ pub fn check_outputs(scene: &Scene) -> Result<(), SceneError> {
     } else {
         n
     };
-    let oriented =
-        !atoms && (scene.has_sites() || scene.species.iter().any(|s| s.inertia.is_some()));
+    let oriented = !atoms
+        && (scene.has_sites()
+            || scene
+                .species
+                .iter()
+                .any(|s| s.inertia.is_some() || s.moments.is_some()));
     let what = if atoms { "atoms" } else { "bodies" };
     for (key, spec, frame_bytes) in [
         (

@@ -4,7 +4,9 @@
 //! Lennard-Jones spheres on terraces need no root search: their terraces are radial steps with
 //! analytic event times ([`terraced::radial_steps`](crate::models::terraced::radial_steps)), so they run on the
 //! stepped path. Only potentials that depend on orientations (the rods of 003 Eqs. 22–23 with
-//! `ζ > 0`, Gay–Berne) build a [`Terraced`](crate::models::terraced::Terraced) model.
+//! `ζ > 0`, Gay–Berne) build a [`Terraced`](crate::models::terraced::Terraced) model; a
+//! potential that reads whole attitudes (SSD/E water) builds one on rigid tops
+//! ([`tops_model`]), with random attitudes and equipartitioned angular velocities.
 
 use glam::DVec3;
 use potential::{
@@ -20,8 +22,14 @@ use crate::config::scene::{
     StepEnergySpec, TerraceSpec,
 };
 use crate::engine::potential::Potentials;
+use crate::models::rotor::{Rotor, Top, TopInertia};
 use crate::models::search::{SearchMethod, SearchSettings};
-use crate::models::terraced::{PairTable, PairTerraces, RodSpecies, draw_omega, radial_steps};
+use crate::models::terraced::{
+    BodySpecies, PairTable, PairTerraces, Rigid, RodSpecies, Terraced, draw_omega, radial_steps,
+};
+
+/// SSD/E water on terraces, between rigid tops.
+pub type Water = Rigid<potential::SoftStickyDipole>;
 
 /// The type of an absent profile (Gay–Berne has none).
 type NoProfile = Profile<fn(f64) -> f64>;
@@ -34,6 +42,8 @@ pub enum Plan {
     Rods(Vec<PairTable<LjRod>>),
     /// Gay–Berne rods.
     GayBerne(Vec<PairTable<GayBerne>>),
+    /// Rigid tops on SSD/E water.
+    Tops(Vec<PairTable<Water>>),
     /// Rigid site molecules with stepped site–site potentials (issue 10).
     Sites(crate::config::site_scene::SitesPlan),
     /// Semi-flexible molecules (species with `bonds`): RATTLE between events.
@@ -71,7 +81,9 @@ impl Plan {
                     let (epsilon, sigma) = match p.potential.expect("checked") {
                         PotentialSpec::LennardJones { epsilon, sigma }
                         | PotentialSpec::Rods { epsilon, sigma, .. } => (epsilon, sigma),
-                        PotentialSpec::GayBerne { .. } => unreachable!("checked"),
+                        PotentialSpec::GayBerne { .. } | PotentialSpec::SsdE { .. } => {
+                            unreachable!("checked")
+                        }
                     };
                     let lj =
                         LennardJones::new(epsilon, sigma).map_err(|e| potential_error(k, e))?;
@@ -134,6 +146,28 @@ impl Plan {
                 }
                 Ok(Plan::GayBerne(tables))
             }
+            Some(PotentialSpec::SsdE { .. }) => {
+                let mut tables = Vec::new();
+                for (k, p) in scene.pair.iter().enumerate() {
+                    let PotentialSpec::SsdE { energy_unit } = p.potential.expect("checked") else {
+                        unreachable!("checked: one kind per scene")
+                    };
+                    let water = Rigid(ssd_e(energy_unit).map_err(|e| potential_error(k, e))?);
+                    let t = p.terraces.as_ref().expect("checked");
+                    let map = rigid_terrace_map(
+                        k,
+                        potential::RigidPairPotential::minimum(&water.0),
+                        t,
+                        kt,
+                        scale,
+                    )?;
+                    let terraces = PairTerraces::new(water, map).map_err(|e| {
+                        SceneError::invalid(format!("pair[{k}].terraces"), e.to_string())
+                    })?;
+                    tables.push(((index(&p.species[0]), index(&p.species[1])), terraces));
+                }
+                Ok(Plan::Tops(tables))
+            }
         }
     }
 
@@ -143,6 +177,7 @@ impl Plan {
             Plan::Spheres(p) => p.reach(),
             Plan::Rods(t) => t.iter().map(|(_, p)| p.reach()).fold(0.0, f64::max),
             Plan::GayBerne(t) => t.iter().map(|(_, p)| p.reach()).fold(0.0, f64::max),
+            Plan::Tops(t) => t.iter().map(|(_, p)| p.reach()).fold(0.0, f64::max),
             Plan::Sites(p) => p.reach(),
             Plan::Flexible(p) => p.reach(),
         }
@@ -155,10 +190,163 @@ impl Plan {
             Plan::Spheres(_) => "stepped",
             Plan::Rods(_) => "terraced-rods",
             Plan::GayBerne(_) => "terraced-gay-berne",
+            Plan::Tops(_) => "terraced-tops",
             Plan::Sites(_) => "rigid-sites",
             Plan::Flexible(_) => "semi-flexible",
         }
     }
+}
+
+/// SSD/E with its energies in internal units (`energy_unit` per kJ/mol): `ε`, `ν₀`, `ν₀'`
+/// scaled, the dipole by `√energy_unit` (the dipolar energy goes as `μ²`).
+fn ssd_e(energy_unit: f64) -> Result<potential::SoftStickyDipole, potential::PotentialError> {
+    let p = potential::SsdParameters::SSD_E;
+    potential::SoftStickyDipole::new(potential::SsdParameters {
+        epsilon: p.epsilon * energy_unit,
+        nu0: p.nu0 * energy_unit,
+        nu0_prime: p.nu0_prime * energy_unit,
+        dipole: p.dipole * energy_unit.sqrt(),
+        ..p
+    })
+}
+
+/// The terrace map of a potential known only by its (lower bound on the) `minimum`: the
+/// paper's evenly spaced levels, or explicit levels with their energies (the placement and
+/// step-energy rules need a radial profile, refused with the scene).
+fn rigid_terrace_map(
+    k: usize,
+    minimum: f64,
+    t: &TerraceSpec,
+    kt: f64,
+    scale: f64,
+) -> Result<TerraceMap, SceneError> {
+    let err = |e| terrace_error(k, e, scale);
+    let mut opts = TerraceOptions::default();
+    if let Some(c) = t.core {
+        opts = opts.with_core(c);
+    }
+    if t.near_minimum == NearMinimumSpec::Shift {
+        opts.near_minimum = NearMinimum::Shift;
+    }
+    if let Some(levels) = &t.levels {
+        let energies = t
+            .energies
+            .as_ref()
+            .expect("checked: explicit levels need energies");
+        let set = LevelSet::new(minimum, levels, &opts).map_err(err)?;
+        return TerraceMap::new(set, Steps::Energies(energies)).map_err(err);
+    }
+    let step = t
+        .step
+        .or(t.step_kt.map(|x| x * kt))
+        .expect("checked: step, step_kt or levels");
+    let set = LevelSet::evenly_spaced(minimum, step, &opts).map_err(err)?;
+    TerraceMap::new(set, Steps::Uniform(step)).map_err(err)
+}
+
+/// The terraced model of a scene of rigid tops: attitudes uniform on SO(3) (or every body
+/// frame turned so that its `ẑ` lies along `init.axis`) and angular velocities from
+/// equipartition, scaled to exactly `3/2 N kT`, each from its own stream of the scene's seed.
+///
+/// # Errors
+/// [`SceneError::Invalid`] naming `search` when the model refuses its settings.
+pub fn tops_model(
+    scene: &Scene,
+    body_species: &[u32],
+    tables: Vec<PairTable<Water>>,
+) -> Result<Terraced<Water>, SceneError> {
+    let species: Vec<BodySpecies<TopInertia>> = scene
+        .species
+        .iter()
+        .map(|s| {
+            let m = s.moments.expect("checked: tops have moments");
+            TopInertia::new(DVec3::from(m))
+                .map(|inertia| BodySpecies {
+                    mass: s.mass,
+                    inertia,
+                })
+                .map_err(|e| SceneError::invalid("species.moments", e))
+        })
+        .collect::<Result<_, _>>()?;
+    let n = body_species.len();
+    let poses: Vec<glam::DQuat> = match scene.init.axis {
+        Some(a) => vec![glam::DQuat::from_rotation_arc(DVec3::Z, DVec3::from(a).normalize()); n],
+        None => random_attitudes(n, scene.seed),
+    };
+    let kt = scene.init.temperature;
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(scene.seed ^ 0x0e6a_0e6a_0000_0009);
+    let mut omegas: Vec<DVec3> = poses
+        .iter()
+        .zip(body_species)
+        .map(|(&q, &s)| Top::draw(&species[s as usize].inertia, q, kt, &mut rng))
+        .collect();
+    let kinetic: f64 = omegas
+        .iter()
+        .zip(&poses)
+        .zip(body_species)
+        .map(|((&w, &q), &s)| {
+            let inertia = &species[s as usize].inertia;
+            Top::start(inertia, q, w).map_or(0.0, |top| top.kinetic(inertia))
+        })
+        .sum();
+    if kinetic > 0.0 {
+        let f = (1.5 * n as f64 * kt / kinetic).sqrt();
+        for w in &mut omegas {
+            *w *= f;
+        }
+    }
+    Terraced::new(
+        species,
+        tables,
+        body_species,
+        &poses,
+        &omegas,
+        0.0,
+        search_settings(scene),
+        scene.seed ^ 0x5ea2_c400_0000_0007,
+    )
+    .map_err(|e| SceneError::invalid("search", e.to_string()))
+}
+
+/// How trajectories draw a water molecule: its oxygen and hydrogens in the body frame of
+/// `potential::water` (the TIP3P geometry whose moments SSD uses: O–H 0.9572 Å, H–O–H
+/// 104.52°, centre of mass at the origin), diameters 1.0 Å (O) and 0.6 Å (H): positions and
+/// diameters.
+pub fn water_drawing() -> (Vec<DVec3>, Vec<f64>) {
+    let (oh, half_angle) = (0.9572_f64, 0.5 * 104.52_f64.to_radians());
+    let (m_o, m_h) = (15.9994, 1.008);
+    let (y, z) = (oh * half_angle.sin(), oh * half_angle.cos());
+    // The centre of mass lies 2 m_H z / M above the oxygen.
+    let z_cm = 2.0 * m_h * z / (m_o + 2.0 * m_h);
+    (
+        vec![
+            DVec3::new(0.0, 0.0, -z_cm),
+            DVec3::new(0.0, y, z - z_cm),
+            DVec3::new(0.0, -y, z - z_cm),
+        ],
+        vec![1.0, 0.6, 0.6],
+    )
+}
+
+/// Attitudes uniform on SO(3): normalised 4-vectors of independent Gaussians, from the
+/// scene's seed (a stream of its own).
+pub fn random_attitudes(n: usize, seed: u64) -> Vec<glam::DQuat> {
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed ^ 0x0a15_0a15_0000_0013);
+    (0..n)
+        .map(|_| {
+            loop {
+                let g = glam::DVec4::new(
+                    StandardNormal.sample(&mut rng),
+                    StandardNormal.sample(&mut rng),
+                    StandardNormal.sample(&mut rng),
+                    StandardNormal.sample(&mut rng),
+                );
+                if let Some(q) = g.try_normalize() {
+                    break glam::DQuat::from_vec4(q);
+                }
+            }
+        })
+        .collect()
 }
 
 fn potential_error(k: usize, e: potential::PotentialError) -> SceneError {
@@ -274,11 +462,16 @@ pub fn search_settings(scene: &Scene) -> SearchSettings {
         if let Some(i) = s.inertia {
             step = step.min(0.076 * (i / kt).sqrt());
         }
+        if let Some(m) = s.moments {
+            let smallest = m.iter().copied().fold(f64::INFINITY, f64::min);
+            step = step.min(0.076 * (smallest / kt).sqrt());
+        }
         for p in &scene.pair {
             let sigma = match p.potential {
                 Some(PotentialSpec::Rods { sigma, .. })
                 | Some(PotentialSpec::LennardJones { sigma, .. }) => sigma,
                 Some(PotentialSpec::GayBerne { sigma0, .. }) => sigma0,
+                Some(PotentialSpec::SsdE { .. }) => potential::SsdParameters::SSD_E.sigma,
                 None => continue,
             };
             step = step.min(0.0064 * sigma * (s.mass / kt).sqrt());
@@ -369,7 +562,7 @@ impl Scene {
                 .pair
                 .first()
                 .and_then(|p| p.potential)
-                .is_some_and(|p| p.is_anisotropic())
+                .is_some_and(|p| p.is_anisotropic() && !p.is_rigid())
     }
 
     /// Whether a run of this scene evaluates the smooth estimators: `output.smooth_estimators`

@@ -308,6 +308,10 @@ pub struct SpeciesSpec {
     /// Moment of inertia about an axis through the centre perpendicular to the body's own:
     /// the body is a rod (a linear rotor, 003 §V). Spheres have none.
     pub inertia: Option<f64>,
+    /// Principal moments of inertia `[I_x, I_y, I_z]` about the body axes of a rigid body of
+    /// any shape (an asymmetric top), for potentials that read each body's whole attitude
+    /// (`ssd-e`).
+    pub moments: Option<[f64; 3]>,
     /// The atoms of a rigid site molecule (issue 10).
     pub sites: Option<Vec<SiteSpec>>,
     /// Or: a shipped rigid site molecule (issue 10).
@@ -462,6 +466,14 @@ pub enum PotentialSpec {
         #[serde(default = "one")]
         nu: f64,
     },
+    /// Soft sticky dipole water, SSD/E (Fennell and Gezelter, J. Chem. Phys. 120, 9175
+    /// (2004)) with its published parameters (`potential::SoftStickyDipole::ssd_e`): bodies
+    /// are rigid asymmetric tops with `moments`; molecular units only.
+    SsdE {
+        /// Internal energy units per kJ/mol (set by `Scene::internal`, not a scene key).
+        #[serde(skip, default = "one")]
+        energy_unit: f64,
+    },
 }
 
 fn gb_kappa() -> f64 {
@@ -480,8 +492,14 @@ impl PotentialSpec {
         match self {
             PotentialSpec::Rods { zeta, .. } => *zeta > 0.0,
             PotentialSpec::LennardJones { .. } => false,
-            PotentialSpec::GayBerne { .. } => true,
+            PotentialSpec::GayBerne { .. } | PotentialSpec::SsdE { .. } => true,
         }
+    }
+
+    /// Whether the potential reads each body's whole attitude (bodies are tops with three
+    /// `moments`), not one axis.
+    pub fn is_rigid(&self) -> bool {
+        matches!(self, PotentialSpec::SsdE { .. })
     }
 
     /// The kind, as written in the scene.
@@ -490,6 +508,7 @@ impl PotentialSpec {
             PotentialSpec::Rods { .. } => "rods",
             PotentialSpec::LennardJones { .. } => "lennard-jones",
             PotentialSpec::GayBerne { .. } => "gay-berne",
+            PotentialSpec::SsdE { .. } => "ssd-e",
         }
     }
 }
@@ -1499,7 +1518,50 @@ impl Scene {
                  must depend on the orientations (zeta > 0)",
             ));
         }
+        let tops = self
+            .pair
+            .first()
+            .and_then(|p| p.potential)
+            .is_some_and(|q| q.is_rigid());
+        if tops && self.units != UnitSystem::Molecular {
+            return Err(SceneError::invalid(
+                "units",
+                "`ssd-e` is parameterised in kJ/mol, Å and g/mol: set units = \"molecular\"",
+            ));
+        }
         for (k, sp) in self.species.iter().enumerate() {
+            match (sp.moments, tops) {
+                (Some(m), true) => {
+                    crate::models::rotor::TopInertia::new(glam::DVec3::from(m))
+                        .map_err(|e| SceneError::invalid(format!("species[{k}].moments"), e))?;
+                }
+                (None, true) => {
+                    return Err(SceneError::invalid(
+                        format!("species[{k}].moments"),
+                        "needed: the potential reads the whole attitude of each body, so the \
+                         bodies are rigid tops with principal moments [I_x, I_y, I_z] about \
+                         their body axes (water: [1.7696, 0.6145, 1.1550] g/mol·Å²)",
+                    ));
+                }
+                (Some(_), false) => {
+                    return Err(SceneError::invalid(
+                        format!("species[{k}].moments"),
+                        "only bodies of a potential that reads whole attitudes (`ssd-e`) have \
+                         three moments: remove the key",
+                    ));
+                }
+                (None, false) => {}
+            }
+            if tops {
+                if sp.inertia.is_some() {
+                    return Err(SceneError::invalid(
+                        format!("species[{k}].inertia"),
+                        "a rigid top has three `moments`, not one moment of a rod: remove \
+                         the key",
+                    ));
+                }
+                continue;
+            }
             match (sp.inertia, rods) {
                 (Some(i), true) => positive(&format!("species[{k}].inertia"), i)?,
                 (None, true) => {
@@ -1547,6 +1609,13 @@ impl Scene {
                 return Err(SceneError::invalid(
                     "init.axis",
                     "only used with `orientations = \"aligned\"`",
+                ));
+            }
+            (Orientations::File, _) if tops => {
+                return Err(SceneError::invalid(
+                    "init.orientations",
+                    "a file gives one axis per body, not a top's whole attitude: use \
+                     `random` or `aligned`",
                 ));
             }
             (Orientations::File, None) if init.positions != Positions::File => {
@@ -1648,6 +1717,7 @@ fn check_potential(k: usize, p: &PotentialSpec) -> Result<(), SceneError> {
             positive(&key("mu"), mu)?;
             non_negative(&key("nu"), nu)?;
         }
+        PotentialSpec::SsdE { .. } => {}
     }
     Ok(())
 }
@@ -1730,7 +1800,12 @@ fn check_terraces(k: usize, p: &PotentialSpec, t: &TerraceSpec) -> Result<(), Sc
     let needs_profile = t.placement != PlacementSpec::EqualEnergy
         || t.step_energy != StepEnergySpec::Equal
         || t.outermost.is_some();
-    if needs_profile && matches!(p, PotentialSpec::GayBerne { .. }) {
+    if needs_profile
+        && matches!(
+            p,
+            PotentialSpec::GayBerne { .. } | PotentialSpec::SsdE { .. }
+        )
+    {
         let which = if t.placement != PlacementSpec::EqualEnergy {
             "placement"
         } else if t.step_energy != StepEnergySpec::Equal {
@@ -1741,7 +1816,7 @@ fn check_terraces(k: usize, p: &PotentialSpec, t: &TerraceSpec) -> Result<(), Sc
         return Err(SceneError::invalid(
             key(which),
             "needs a radial profile of the potential: available for `rods` and \
-             `lennard-jones`, not `gay-berne`",
+             `lennard-jones`, not `gay-berne` or `ssd-e`",
         ));
     }
     Ok(())

@@ -15,6 +15,10 @@ fn lengths_of(p: &PotentialSpec) -> (f64, f64) {
             (sigma, sigma)
         }
         PotentialSpec::GayBerne { sigma0, kappa, .. } => (sigma0, sigma0 * kappa.max(1.0)),
+        PotentialSpec::SsdE { .. } => {
+            let sigma = potential::SsdParameters::SSD_E.sigma;
+            (sigma, sigma)
+        }
     }
 }
 
@@ -24,6 +28,9 @@ fn energy_of(p: &PotentialSpec) -> f64 {
             epsilon
         }
         PotentialSpec::GayBerne { epsilon0, .. } => epsilon0,
+        PotentialSpec::SsdE { energy_unit } => {
+            energy_unit * potential::SsdParameters::SSD_E.epsilon
+        }
     }
 }
 
@@ -120,6 +127,18 @@ pub fn check(scene: &Scene) -> Result<(), SceneError> {
             "species",
             "site molecules interact through hard cores and square wells between their sites, \
              which have no continuous force; run them with the event-driven engine",
+        );
+    }
+    if scene
+        .pair
+        .first()
+        .and_then(|p| p.potential)
+        .is_some_and(|p| p.is_rigid())
+    {
+        return refuse(
+            "pair[0].potential",
+            "the standard-MD integrator has no rigid tops on full-attitude potentials yet; run \
+             the scene with the event-driven engine",
         );
     }
     if scene.pair.is_empty() {

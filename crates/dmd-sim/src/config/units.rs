@@ -96,6 +96,7 @@ impl Scene {
                 match pot {
                     Rods { epsilon, .. } | LennardJones { epsilon, .. } => *epsilon *= e,
                     GayBerne { epsilon0, .. } => *epsilon0 *= e,
+                    SsdE { energy_unit } => *energy_unit *= e,
                 }
             }
             if let Some(t) = &mut p.terraces {

@@ -390,6 +390,10 @@ pub fn run_scene_with(
             let model = terraced_model(scene, base, &config, tables)?;
             ctx.go_any_queue(model, reporter)
         }
+        Plan::Tops(tables) => {
+            let model = crate::config::rods::tops_model(scene, &config.species, tables)?;
+            ctx.go_any_queue(model, reporter)
+        }
         Plan::Sites(plan) => {
             let model = crate::config::site_scene::model(scene, &config, plan, resumed)?;
             ctx.go_any_queue(model, reporter)
@@ -418,6 +422,13 @@ fn layout_of(scene: &Scene, plan: &Plan) -> Layout {
             Vec::new(),
         ),
         Plan::Rods(_) | Plan::GayBerne(_) => (vec![Drawing::Rod; species.len()], Vec::new()),
+        Plan::Tops(_) => {
+            let (centres, diameters) = crate::config::rods::water_drawing();
+            (
+                vec![Drawing::Sites { centres, diameters }; species.len()],
+                Vec::new(),
+            )
+        }
         Plan::Sites(p) => (
             p.types
                 .iter()

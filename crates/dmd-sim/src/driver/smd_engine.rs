@@ -326,6 +326,7 @@ pub fn run_with(
             system,
             Smooth::Lj(LennardJones::new(epsilon, sigma).map_err(pot_err)?),
         ),
+        PotentialSpec::SsdE { .. } => unreachable!("checked: smd_spec::check refuses ssd-e"),
         PotentialSpec::GayBerne {
             sigma0,
             epsilon0,
