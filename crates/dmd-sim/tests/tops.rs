@@ -83,12 +83,38 @@ fn cluster(spacing: f64, spin: f64, seed: u64) -> (Vec<DVec3>, Vec<DVec3>, Vec<D
 }
 
 /// Total energy, linear momentum and angular momentum (orbital about the origin plus spins).
-fn invariants(sim: &Simulation<Terraced<Water>, Queue>) -> (f64, DVec3, DVec3) {
+fn invariants(sim: &Simulation<Terraced<Water>, Queue>) -> Invariants {
     (
         sim.kinetic_energy() + sim.potential_energy(),
         sim.momentum_and_mass().0,
         sim.angular_momentum(),
     )
+}
+
+type Invariants = (f64, DVec3, DVec3);
+
+/// Runs `model` for `events` from positions `r` and velocities `v` in a 40 Å box: the
+/// simulation and its invariants before and after.
+fn run_in_box(
+    model: Terraced<Water>,
+    r: &[DVec3],
+    v: &[DVec3],
+    events: u64,
+) -> (Simulation<Terraced<Water>, Queue>, Invariants, Invariants) {
+    let mut sim: Simulation<_, Queue> = Simulation::new(
+        DVec3::splat(40.0),
+        r,
+        v,
+        &vec![0; r.len()],
+        model,
+        settings(0.5),
+    )
+    .unwrap();
+    let before = invariants(&sim);
+    sim.run(Stop::Events(events), &mut NoSampler, &mut |_| {})
+        .unwrap();
+    let after = invariants(&sim);
+    (sim, before, after)
 }
 
 fn run_cluster(spin: f64, seed: u64, verify: bool) -> Simulation<Terraced<Water>, Queue> {
@@ -99,19 +125,7 @@ fn run_cluster(spin: f64, seed: u64, verify: bool) -> Simulation<Terraced<Water>
         search.verify_step = Some(2e-4 / spin.max(1.0));
     }
     let model = water(&poses, &omegas, 0.5 * KT, search);
-    let mut sim: Simulation<_, Queue> = Simulation::new(
-        DVec3::splat(40.0),
-        &r,
-        &v,
-        &vec![0; n],
-        model,
-        settings(0.5),
-    )
-    .unwrap();
-    let (e0, p0, l0) = invariants(&sim);
-    sim.run(Stop::Events(6_000), &mut NoSampler, &mut |_| {})
-        .unwrap();
-    let (e1, p1, l1) = invariants(&sim);
+    let (sim, (e0, p0, l0), (e1, p1, l1)) = run_in_box(model, &r, &v, 6_000);
     let c = sim.counters();
     let st = sim.model().search_stats();
     assert!(c.pair_events() > 3000, "{c:?}");
@@ -180,19 +194,7 @@ fn tops_near_the_separatrix_conserve_the_invariants() {
         })
         .collect();
     let model = water(&poses, &omegas, 0.5 * KT, SearchSettings::paper(0.005));
-    let mut sim: Simulation<_, Queue> = Simulation::new(
-        DVec3::splat(40.0),
-        &r,
-        &v,
-        &vec![0; n],
-        model,
-        settings(0.5),
-    )
-    .unwrap();
-    let (e0, p0, l0) = invariants(&sim);
-    sim.run(Stop::Events(3_000), &mut NoSampler, &mut |_| {})
-        .unwrap();
-    let (e1, p1, l1) = invariants(&sim);
+    let (sim, (e0, p0, l0), (e1, p1, l1)) = run_in_box(model, &r, &v, 3_000);
     let k = sim.kinetic_energy();
     assert!((e1 - e0).abs() < 1e-12 * k, "E {e0} -> {e1}");
     assert!((p1 - p0).length() < 1e-9, "p {p0} -> {p1}");

@@ -210,6 +210,18 @@ fn ssd_e(energy_unit: f64) -> Result<potential::SoftStickyDipole, potential::Pot
     })
 }
 
+/// The core and near-minimum rule of a pair's terraces.
+fn terrace_options(t: &TerraceSpec) -> TerraceOptions {
+    let mut opts = TerraceOptions::default();
+    if let Some(c) = t.core {
+        opts = opts.with_core(c);
+    }
+    if t.near_minimum == NearMinimumSpec::Shift {
+        opts.near_minimum = NearMinimum::Shift;
+    }
+    opts
+}
+
 /// The terrace map of a potential known only by its (lower bound on the) `minimum`: the
 /// paper's evenly spaced levels, or explicit levels with their energies (the placement and
 /// step-energy rules need a radial profile, refused with the scene).
@@ -221,13 +233,7 @@ fn rigid_terrace_map(
     scale: f64,
 ) -> Result<TerraceMap, SceneError> {
     let err = |e| terrace_error(k, e, scale);
-    let mut opts = TerraceOptions::default();
-    if let Some(c) = t.core {
-        opts = opts.with_core(c);
-    }
-    if t.near_minimum == NearMinimumSpec::Shift {
-        opts.near_minimum = NearMinimum::Shift;
-    }
+    let opts = terrace_options(t);
     if let Some(levels) = &t.levels {
         let energies = t
             .energies
@@ -390,13 +396,7 @@ fn terrace_map<P: PairPotential, F: Fn(f64) -> f64>(
     scale: f64,
 ) -> Result<TerraceMap, SceneError> {
     let err = |e| terrace_error(k, e, scale);
-    let mut opts = TerraceOptions::default();
-    if let Some(c) = t.core {
-        opts = opts.with_core(c);
-    }
-    if t.near_minimum == NearMinimumSpec::Shift {
-        opts.near_minimum = NearMinimum::Shift;
-    }
+    let opts = terrace_options(t);
     let step = t.step.or(t.step_kt.map(|x| x * kt));
     let rule = |step: f64| match t.step_energy {
         StepEnergySpec::Equal => StepEnergy::Equal(step),
