@@ -183,7 +183,6 @@ fn fast_spinning_tops_miss_no_event_on_the_verification_grid() {
 #[test]
 fn tops_near_the_separatrix_conserve_the_invariants() {
     let (r, v, poses, _) = cluster(3.0, 1.0, 9);
-    let n = r.len();
     // Body y has the smallest moment, z the intermediate one (0.6145 < 1.1550 < 1.7696).
     let omegas: Vec<DVec3> = poses
         .iter()
