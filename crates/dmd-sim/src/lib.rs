@@ -1,5 +1,5 @@
-//! `dmd-sim`: an event-driven ("discontinuous") molecular dynamics simulator for spheres and
-//! rigid rods.
+//! `dmd-sim`: an event-driven ("discontinuous") molecular dynamics simulator for spheres, rigid
+//! bodies on terraced smooth potentials, and rigid and semi-flexible site molecules.
 //!
 //! Bodies move freely and exactly between events; at an event a pair reaches a step of its
 //! stepped radial potential (a hard core, the edge of a square well, a terrace of a stepped
@@ -10,10 +10,11 @@
 //! event times of spheres are analytic (a quadratic per boundary), and the time origin is
 //! re-based periodically.
 //!
-//! Rigid rods ([`terraced`], seed 003) interact through a smooth orientation-dependent pair
-//! potential mapped onto energy terraces; they rotate exactly between events, their event times
-//! are found by root searches with virtual events, and the impulse follows the smooth force and
-//! torques.
+//! Rigid bodies ([`terraced`], seed 003) — rods, or bodies of any shape such as SSD/E water
+//! molecules, whose rotation is a [`rotor::Rotor`] — interact through a smooth
+//! orientation-dependent pair potential mapped onto energy terraces; they rotate exactly between
+//! events, their event times are found by root searches with virtual events, and the impulse
+//! follows the smooth force and torques.
 //!
 //! The `dmd` command runs a scene file ([`scene`], documented key by key in
 //! `docs/USER-GUIDE.md`) and writes `summary.json`, observables and trajectories

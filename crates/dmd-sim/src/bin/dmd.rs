@@ -20,10 +20,17 @@ use dmd_sim::simulation::{Progress, Stop};
 use dmd_sim::smd_engine::{self, Engine, SmdSummary};
 use indicatif::{ProgressBar, ProgressStyle};
 
-/// Event-driven molecular dynamics of spheres with hard cores, square wells and stepped
-/// potentials.
+/// The `dmd` command.
 #[derive(Parser)]
-#[command(name = "dmd", version, about)]
+#[command(
+    name = "dmd",
+    version,
+    about = "Event-driven (discontinuous) molecular dynamics: hard and stepped spheres, rods and \
+             rigid bodies of any shape on terraced smooth potentials (SSD/E water among them), \
+             rigid and semi-flexible site molecules; standard MD on the same smooth potentials \
+             with --engine smd. Scenes are TOML files, described key by key in \
+             docs/USER-GUIDE.md."
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -43,7 +50,7 @@ enum Command {
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
         /// The engine, overriding the scene's `engine` key: `dmd` (event-driven) or `smd`
-        /// (standard MD on the smoothed potential, issue 8).
+        /// (standard MD on the smoothed potential).
         #[arg(long, value_parser = ["dmd", "smd"])]
         engine: Option<String>,
         /// No progress bar and no summary on the terminal.
@@ -364,7 +371,7 @@ fn main() -> ExitCode {
     }
 }
 
-/// `dmd run` of a scene with `engine = "smd"` (issue 8).
+/// `dmd run` of a scene with `engine = "smd"`.
 fn run_smd(
     scene: &std::path::Path,
     s: &Scene,
