@@ -16,8 +16,8 @@
 //! and the two smooth estimates; the summary takes their means and Flyvbjerg–Petersen
 //! block-average errors ([`block_average`]).
 
-use glam::DVec3;
-use potential::{PairGeometry, PairPotential, Smoothed};
+use glam::{DQuat, DVec3};
+use potential::{PairGeometry, PairPotential, RigidGeometry, RigidPairPotential, Smoothed};
 use serde::{Deserialize, Serialize};
 
 use crate::analysis::block::{BlockEstimate, block_average};
@@ -40,6 +40,11 @@ pub trait Evaluate: std::fmt::Debug + Send {
     /// `U` and `W` at the configuration of `view` (NaN if a pair cannot be evaluated: an
     /// overlap the smooth potential has no finite force for).
     fn evaluate(&self, view: &View<'_>) -> SmoothSums;
+
+    /// Whether the views it is given must carry the bodies' attitudes.
+    fn needs_attitudes(&self) -> bool {
+        false
+    }
 }
 
 /// The smooth (cut and switched) potentials of every species pair.
@@ -59,17 +64,7 @@ impl<P: PairPotential> Estimator<P> {
     /// # Panics
     /// If a species pair is missing (the scene's checks guarantee every pair).
     pub fn new(n_species: usize, pots: Vec<((usize, usize), Smoothed<P>)>) -> Self {
-        let mut table = vec![u32::MAX; n_species * n_species];
-        let mut list = Vec::with_capacity(pots.len());
-        for ((a, b), p) in pots {
-            table[a * n_species + b] = list.len() as u32;
-            table[b * n_species + a] = list.len() as u32;
-            list.push(p);
-        }
-        assert!(
-            table.iter().all(|&k| k != u32::MAX),
-            "a potential for every species pair"
-        );
+        let (table, list) = species_table(n_species, pots);
         let cutoff = list.iter().map(|p| p.window().1).fold(0.0, f64::max);
         Estimator {
             n_species,
@@ -116,24 +111,120 @@ impl<P: PairPotential> Estimator<P> {
 
 impl<P: PairPotential + std::fmt::Debug + Send> Evaluate for Estimator<P> {
     fn evaluate(&self, view: &View<'_>) -> SmoothSums {
-        let l = view.lengths;
-        let n = view.bodies.len();
-        let pos: Vec<DVec3> = (0..n).map(|i| wrap(view.position(i), l)).collect();
         // Bodies without orientation (spheres) have no axes; any unit vector does for them.
         let axis = |i: usize| view.axes.get(i).copied().unwrap_or(DVec3::Z);
-        let (mut u, mut w) = (Compensated::ZERO, Compensated::ZERO);
         let bodies = view.bodies;
-        for_each_pair(&pos, l, self.cutoff, |i, j, d| {
-            let s = self.pair_sums(bodies[i].species, bodies[j].species, d, axis(i), axis(j));
-            if s.energy != 0.0 || s.virial != 0.0 {
-                u.add(s.energy);
-                w.add(s.virial);
-            }
-        });
-        SmoothSums {
-            energy: u.value(),
-            virial: w.value(),
+        sum_pairs(view, self.cutoff, |i, j, d| {
+            self.pair_sums(bodies[i].species, bodies[j].species, d, axis(i), axis(j))
+        })
+    }
+}
+
+/// The species × species table of `pots` (every unordered pair of the `n_species` species
+/// once) and the potentials in table order.
+///
+/// # Panics
+/// If a species pair is missing (the scene's checks guarantee every pair).
+fn species_table<T>(n_species: usize, pots: Vec<((usize, usize), T)>) -> (Vec<u32>, Vec<T>) {
+    let mut table = vec![u32::MAX; n_species * n_species];
+    let mut list = Vec::with_capacity(pots.len());
+    for ((a, b), p) in pots {
+        table[a * n_species + b] = list.len() as u32;
+        table[b * n_species + a] = list.len() as u32;
+        list.push(p);
+    }
+    assert!(
+        table.iter().all(|&k| k != u32::MAX),
+        "a potential for every species pair"
+    );
+    (table, list)
+}
+
+/// `U` and `W` summed over every pair of `view` within `cutoff` (minimum image), each pair's
+/// from `pair(i, j, r_ij)`.
+fn sum_pairs(
+    view: &View<'_>,
+    cutoff: f64,
+    pair: impl Fn(usize, usize, DVec3) -> SmoothSums,
+) -> SmoothSums {
+    let l = view.lengths;
+    let n = view.bodies.len();
+    let pos: Vec<DVec3> = (0..n).map(|i| wrap(view.position(i), l)).collect();
+    let (mut u, mut w) = (Compensated::ZERO, Compensated::ZERO);
+    for_each_pair(&pos, l, cutoff, |i, j, d| {
+        let s = pair(i, j, d);
+        if s.energy != 0.0 || s.virial != 0.0 {
+            u.add(s.energy);
+            w.add(s.virial);
         }
+    });
+    SmoothSums {
+        energy: u.value(),
+        virial: w.value(),
+    }
+}
+
+/// The smooth potentials of rigid bodies of any shape (`potential::RigidPairPotential`, each
+/// zero beyond its own cut-off, as SSD/E is), evaluated at the bodies' attitudes: the view
+/// must carry them (`Simulation::sample_attitudes`), else every sum is NaN.
+#[derive(Clone, Debug)]
+pub struct RigidEstimator<P> {
+    n_species: usize,
+    table: Vec<u32>,
+    pots: Vec<P>,
+    cutoff: f64,
+}
+
+impl<P: RigidPairPotential> RigidEstimator<P> {
+    /// The potentials `pots` of species pairs `(a, b)` (every unordered pair once), each zero
+    /// beyond `cutoff`.
+    ///
+    /// # Panics
+    /// If a species pair is missing (the scene's checks guarantee every pair).
+    pub fn new(n_species: usize, pots: Vec<((usize, usize), P)>, cutoff: f64) -> Self {
+        let (table, pots) = species_table(n_species, pots);
+        RigidEstimator {
+            n_species,
+            table,
+            pots,
+            cutoff,
+        }
+    }
+
+    /// `U` and `W` of one pair at `r_ij = r_i − r_j` and attitudes `q_i`, `q_j` (NaN where the
+    /// potential has no finite force).
+    #[inline]
+    pub fn pair_sums(&self, a: u32, b: u32, r_ij: DVec3, q_i: DQuat, q_j: DQuat) -> SmoothSums {
+        let p = &self.pots[self.table[a as usize * self.n_species + b as usize] as usize];
+        match p.evaluate(&RigidGeometry::new(r_ij, q_i, q_j)) {
+            Ok(ev) => SmoothSums {
+                energy: ev.energy,
+                virial: r_ij.dot(ev.force),
+            },
+            Err(_) => SmoothSums {
+                energy: f64::NAN,
+                virial: f64::NAN,
+            },
+        }
+    }
+}
+
+impl<P: RigidPairPotential + std::fmt::Debug + Send> Evaluate for RigidEstimator<P> {
+    fn needs_attitudes(&self) -> bool {
+        true
+    }
+
+    fn evaluate(&self, view: &View<'_>) -> SmoothSums {
+        if view.attitudes.len() != view.bodies.len() {
+            return SmoothSums {
+                energy: f64::NAN,
+                virial: f64::NAN,
+            };
+        }
+        let (bodies, q) = (view.bodies, &view.attitudes);
+        sum_pairs(view, self.cutoff, |i, j, d| {
+            self.pair_sums(bodies[i].species, bodies[j].species, d, q[i], q[j])
+        })
     }
 }
 

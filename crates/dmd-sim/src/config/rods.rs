@@ -553,8 +553,8 @@ pub fn equipartitioned_omegas(axes: &[DVec3], inertia: &[f64], kt: f64, seed: u6
 }
 
 impl Scene {
-    /// Whether the event-driven engine runs this scene as terraced rods or Gay–Berne bodies
-    /// (`Terraced<P>`), whose smooth potential the estimators evaluate.
+    /// Whether the event-driven engine runs this scene as terraced rods, Gay–Berne bodies or
+    /// rigid tops (`Terraced<P>`), whose smooth potential the estimators evaluate.
     pub fn has_terraced_smooth_potential(&self) -> bool {
         !self.has_bonds()
             && !self.has_sites()
@@ -562,7 +562,7 @@ impl Scene {
                 .pair
                 .first()
                 .and_then(|p| p.potential)
-                .is_some_and(|p| p.is_anisotropic() && !p.is_rigid())
+                .is_some_and(|p| p.is_anisotropic())
     }
 
     /// Whether a run of this scene evaluates the smooth estimators: `output.smooth_estimators`
@@ -621,6 +621,47 @@ pub fn estimator<P: PairPotential + Clone + std::fmt::Debug + Send + 'static>(
         scene.species.len(),
         pots,
     ))))
+}
+
+/// The estimator of a scene of SSD/E tops (in internal units): the terraced pairs' own smooth
+/// potentials, each zero beyond its cut-off (9 Å), or `None` when the scene does not want one
+/// (`output.smooth_estimators = false` or no `output.sample_interval`) or the cut-off does not
+/// fit the box (then an explicit `output.smooth_estimators = true` is an error).
+///
+/// # Errors
+/// [`SceneError::Invalid`] naming `output.smooth_estimators`.
+pub fn tops_estimator(
+    scene: &Scene,
+    lengths: DVec3,
+    tables: &[PairTable<Water>],
+) -> Result<Option<Box<dyn crate::analysis::smooth::Evaluate>>, SceneError> {
+    if !scene.wants_smooth_estimators() {
+        return Ok(None);
+    }
+    let cutoff = tables
+        .iter()
+        .map(|(_, t)| t.potential().0.cutoff())
+        .fold(0.0, f64::max);
+    let half = 0.5 * lengths.min_element();
+    if cutoff >= half {
+        return match scene.output.smooth_estimators {
+            Some(true) => Err(SceneError::invalid(
+                "output.smooth_estimators",
+                format!(
+                    "the potential's cut-off {cutoff} reaches half the shortest box side \
+                     {half:.6}: a body would interact with two images of another; use more bodies"
+                ),
+            )),
+            _ => Ok(None),
+        };
+    }
+    let pots = tables
+        .iter()
+        .map(|((a, b), t)| ((*a, *b), t.potential().0))
+        .collect();
+    Ok(Some(Box::new(
+        crate::analysis::smooth::RigidEstimator::new(scene.species.len(), pots, cutoff),
+    )))
 }
 
 #[cfg(test)]

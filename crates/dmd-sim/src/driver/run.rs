@@ -391,6 +391,11 @@ pub fn run_scene_with(
             ctx.go_any_queue(model, reporter)
         }
         Plan::Tops(tables) => {
+            ctx.smooth.set(crate::config::rods::tops_estimator(
+                scene,
+                config.lengths,
+                &tables,
+            )?);
             let model = crate::config::rods::tops_model(scene, &config.species, tables)?;
             ctx.go_any_queue(model, reporter)
         }
@@ -677,6 +682,13 @@ impl Context<'_> {
         if o.sample_interval.is_some() {
             observers.samples = Some(crate::analysis::smooth::Samples::default());
             observers.smooth = self.smooth.take();
+            if observers
+                .smooth
+                .as_ref()
+                .is_some_and(|e| e.needs_attitudes())
+            {
+                sim.set_sample_attitudes(true);
+            }
             observers.smooth_every = o
                 .smooth_every
                 .unwrap_or(crate::config::scene::DEFAULT_SMOOTH_EVERY);

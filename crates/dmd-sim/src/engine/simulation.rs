@@ -228,7 +228,9 @@ pub struct View<'a> {
     /// Events of the current phase so far.
     pub events: u64,
     /// The attitude of every body now ([`PairModel::attitude`]: body → lab unit
-    /// quaternions), in a frame's view only; empty for models without attitudes.
+    /// quaternions), in a frame's view, and in every view when the run asks for them
+    /// ([`Simulation::set_sample_attitudes`]); empty otherwise and for models without
+    /// attitudes.
     pub attitudes: Vec<DQuat>,
     /// The spin angular momentum `I ω` of every body with an attitude, lab frame
     /// ([`PairModel::spin`]), in a frame's view only.
@@ -381,6 +383,8 @@ pub struct Simulation<M, S> {
     rng: Xoshiro256PlusPlus,
     /// Pairs hidden from the predictions (HMC fault injection; inactive otherwise).
     blindfold: Blindfold,
+    /// Whether samples' views carry the attitudes ([`Simulation::set_sample_attitudes`]).
+    sample_attitudes: bool,
     next_thermostat: f64,
     sample_dt: Option<f64>,
     next_sample: f64,
@@ -552,6 +556,7 @@ where
             thermostat: None,
             rng: Xoshiro256PlusPlus::seed_from_u64(settings.seed),
             blindfold: Blindfold::default(),
+            sample_attitudes: false,
             next_thermostat: f64::INFINITY,
             sample_dt: None,
             next_sample: f64::INFINITY,
@@ -1329,10 +1334,22 @@ where
             rotational_kinetic: self.model.rotational_kinetic(),
             rotational_dof: self.model.rotational_dof(),
             events: self.counters.events,
-            attitudes: Vec::new(),
+            attitudes: if self.sample_attitudes {
+                (0..self.bodies.len() as u32)
+                    .map_while(|i| self.model.attitude(i, self.now))
+                    .collect()
+            } else {
+                Vec::new()
+            },
             spins: Vec::new(),
             atoms: Vec::new(),
         }
+    }
+
+    /// Whether every view (samples too, not only trajectory frames) carries the bodies'
+    /// attitudes: the smooth estimators of full-attitude potentials read them.
+    pub fn set_sample_attitudes(&mut self, yes: bool) {
+        self.sample_attitudes = yes;
     }
 
     /// The view of a trajectory frame: [`view`](Self::view) with the attitudes, spins and

@@ -288,6 +288,7 @@ where
         });
         let mut sim = Simulation {
             blindfold: Blindfold::default(),
+            sample_attitudes: false,
             bodies: Vec::new(),
             cell_of: Vec::new(),
             images: Vec::new(),
