@@ -48,12 +48,13 @@ pub fn default_window(p: &PotentialSpec) -> (f64, f64) {
     (contact + 1.5 * sigma, contact + 2.0 * sigma)
 }
 
-/// The default time step of SSD/E water: 2 fs (in ps). Chosen by the energy criterion of
-/// docs/PERFORMANCE.md, std(E)/std(U) ≤ 1 % in NVE production, measured on
-/// `scenes/water-ssd.toml` (1000 molecules, 298.15 K) with 0.2 ps of equilibration and 0.2 ps
-/// of production: 0.023 % at 0.5 fs, 0.092 % at 1 fs, 0.38 % at 2 fs, 0.84 % at 3 fs (the
-/// `dt²` of the splitting); after 2 ps of equilibration 0.099 %, 0.47 %, 0.85 % at 1, 2, 3 fs.
-/// 2 fs keeps a factor two from the bound at 2.4 CPU s per simulated ps.
+/// The default time step of SSD/E water: 2 fs (in ps), the longest round step that meets the
+/// energy criterion of docs/PERFORMANCE.md, std(E)/std(U) ≤ 1 % in NVE production. Measured
+/// on `scenes/water-ssd.toml` (1000 molecules, 298.15 K): after 10 ps of equilibration, 1 ps
+/// of production gives 0.20 % at 1 fs, 0.84 % at 2 fs, 1.4 % at 2.5 fs (the `dt²` of the
+/// splitting); right after the lattice melts (0.2 ps + 0.2 ps) the still relaxing `U`
+/// fluctuates more and the ratios are lower, 0.023, 0.092, 0.38, 0.84 % at 0.5, 1, 2, 3 fs.
+/// 2 fs costs 2.4 CPU s per simulated ps.
 pub const SSD_E_DT: f64 = 0.002;
 
 /// The default time step: `0.0028 σ √(m / max(kT, ε))`, and for rods at most `√(I / kT)/30`.
