@@ -178,7 +178,7 @@ pub fn check(scene: &Scene) -> Result<(), SceneError> {
             return refuse(
                 &format!("pair[{k}].steps"),
                 "a stepped potential (hard core, square well) has no continuous force; give \
-                 a smooth `potential` (rods, lennard-jones, gay-berne, ssd-e)",
+                 a smooth `potential` (rods, lennard-jones, gay-berne)",
             );
         }
     }
