@@ -186,3 +186,10 @@ fn water_refuses_a_smoothing_window_with_the_reason() {
         "{msg}"
     );
 }
+
+#[test]
+fn water_in_a_box_too_small_for_the_cut_off_is_refused_naming_the_box() {
+    let e = smd_engine::run(&water(&["species.0.count=125"]), Path::new("."), None).unwrap_err();
+    let msg = e.to_string();
+    assert!(msg.contains("`box`") && msg.contains("cut-off 9"), "{msg}");
+}

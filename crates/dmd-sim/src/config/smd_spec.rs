@@ -251,8 +251,9 @@ pub fn window(scene: &Scene, pot: &PotentialSpec) -> (f64, f64) {
 /// optimum is flat about it) or what fits a small box.
 ///
 /// # Errors
-/// [`SceneError::Invalid`] naming `smd.smoothing.r_u` or `smd.skin` if the list radius
-/// `r_u + skin` reaches half the shortest box side (minimum image).
+/// [`SceneError::Invalid`] naming `smd.smoothing.r_u` (`box` for SSD/E, whose cut-off is its
+/// own) or `smd.skin` if the list radius `r_u + skin` reaches half the shortest box side
+/// (minimum image).
 pub fn list_skin(
     pot: &PotentialSpec,
     (_, r_u): (f64, f64),
@@ -260,6 +261,19 @@ pub fn list_skin(
     lengths: DVec3,
 ) -> Result<f64, SceneError> {
     let half = 0.5 * lengths.min_element();
+    if r_u >= half
+        && let PotentialSpec::SsdE { .. } = pot
+    {
+        // SSD/E's cut-off is its own, not a key of the scene.
+        return Err(SceneError::invalid(
+            "box",
+            format!(
+                "SSD/E's cut-off {r_u} reaches half the shortest box side {half}: a molecule \
+                 would interact with two images of another; use more molecules or a lower \
+                 density"
+            ),
+        ));
+    }
     if r_u >= half {
         return Err(SceneError::invalid(
             "smd.smoothing.r_u",
