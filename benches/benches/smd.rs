@@ -99,7 +99,7 @@ impl ValueFormatter for CpuFormatter {
     }
 }
 
-fn rods(n: usize, rho_star: f64, t_star: f64, dt_fs: f64) -> Integrator<LjRod> {
+fn rods(n: usize, rho_star: f64, t_star: f64, dt_fs: f64) -> Integrator<Smoothed<LjRod>> {
     let rod = LjRod::paper();
     let kt = t_star * rod.epsilon();
     let setup = Setup {
@@ -128,7 +128,7 @@ fn lj(
     window: (f64, f64),
     skin: f64,
     eq: u64,
-) -> Integrator<LennardJones> {
+) -> Integrator<Smoothed<LennardJones>> {
     let setup = Setup::new(n, rho, BodyModel::sphere(1.0).unwrap(), kt);
     let pot = Smoothed::new(LennardJones::new(1.0, 1.0).unwrap(), window.0, window.1).unwrap();
     let mut md = Integrator::new(
@@ -144,7 +144,7 @@ fn lj(
 }
 
 /// Every pair of the current state within the cut-off, as the force loop sees it.
-fn pairs<P: PairPotential>(md: &Integrator<P>) -> Vec<PairGeometry> {
+fn pairs<P: PairPotential>(md: &Integrator<Smoothed<P>>) -> Vec<PairGeometry> {
     let s = md.system();
     let (_, r_u) = md.potential().window();
     let l = s.lengths();
@@ -171,7 +171,7 @@ fn pairs<P: PairPotential>(md: &Integrator<P>) -> Vec<PairGeometry> {
 fn case<P: PairPotential + Clone>(
     c: &mut Criterion<CpuTime>,
     name: &str,
-    mut md: Integrator<P>,
+    mut md: Integrator<Smoothed<P>>,
     baseline: bool,
 ) {
     let n = md.system().n();

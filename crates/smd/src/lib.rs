@@ -7,7 +7,10 @@
 //! - Verlet neighbour lists with a skin, built from cells and rebuilt when a body has moved
 //!   half the skin; the potential smoothed to zero between `r_l` and `r_u` (003 Eq. 26,
 //!   [`potential::Smoothed`]) and evaluated with the same `PairPotential::evaluate` as the
-//!   event-driven engine, generic over the potential (static dispatch);
+//!   event-driven engine, generic over the potential (static dispatch); rigid tops on a
+//!   full-attitude [`potential::RigidPairPotential`] that vanishes beyond its own cut-off
+//!   (SSD/E water) through [`Rigid`], with the forces and torques of
+//!   `RigidPairPotential::evaluate` ([`Interaction`] is either kind);
 //! - [`System`]: bodies in a periodic box from a lattice, random orientations and
 //!   Maxwell–Boltzmann velocities ([`Setup`]), or from explicit state;
 //! - [`observe`]: g(r), MSD, normalised VACF, orientational ACF, energy, temperature and
@@ -57,6 +60,7 @@ pub mod units;
 
 pub use body::BodyModel;
 pub use error::SmdError;
+pub use forces::{Interaction, Rigid};
 pub use integrator::{DEFAULT_GUARD, Energy, Integrator, Observer, RunStats, Settings, Snapshot};
 pub use neighbour::capped_cell_dims;
 pub use system::{Lattice, MAX_BODIES, Orientations, Setup, System};

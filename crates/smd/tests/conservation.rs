@@ -9,7 +9,7 @@ use smd::units;
 /// times over `span` (short enough that the two trajectories stay close, so that the ratio
 /// measures the integrator and not the sampling of two diverging trajectories).
 fn ratio<P: potential::PairPotential + Clone>(
-    base: &smd::Integrator<P>,
+    base: &smd::Integrator<potential::Smoothed<P>>,
     dt: f64,
     span: f64,
     every: f64,

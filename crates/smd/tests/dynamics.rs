@@ -27,7 +27,7 @@ fn unit(r: &mut Xoshiro256PlusPlus) -> DVec3 {
 
 /// Runs `steps` forward, reverses the momenta, runs `steps` back, reverses again, and returns
 /// the largest deviation of positions (unwrapped) and axes from the start.
-fn round_trip<P: PairPotential>(md: &mut Integrator<P>, steps: u64) -> (f64, f64) {
+fn round_trip<P: PairPotential>(md: &mut Integrator<Smoothed<P>>, steps: u64) -> (f64, f64) {
     let s = md.system();
     let r0: Vec<DVec3> = (0..s.n()).map(|i| s.unwrapped(i)).collect();
     let a0 = s.axes().to_vec();
@@ -94,7 +94,7 @@ fn time_reversible_to_round_off() {
 
 /// Asymmetric tops (moments 0.8, 1.154, 1.5 g/mol·Å²) carrying the paper's rod potential along
 /// their body z axis, at the rods' state point.
-fn tops(n: usize, seed: u64) -> Integrator<LjRod> {
+fn tops(n: usize, seed: u64) -> Integrator<Smoothed<LjRod>> {
     let rod = LjRod::paper();
     let kt = 1.4 * rod.epsilon();
     let body = BodyModel::rigid(18.0, [0.8, 1.154, 1.5], DVec3::Z).unwrap();

@@ -199,7 +199,9 @@ impl Plan {
 
 /// SSD/E with its energies in internal units (`energy_unit` per kJ/mol): `ε`, `ν₀`, `ν₀'`
 /// scaled, the dipole by `√energy_unit` (the dipolar energy goes as `μ²`).
-fn ssd_e(energy_unit: f64) -> Result<potential::SoftStickyDipole, potential::PotentialError> {
+pub(crate) fn ssd_e(
+    energy_unit: f64,
+) -> Result<potential::SoftStickyDipole, potential::PotentialError> {
     let p = potential::SsdParameters::SSD_E;
     potential::SoftStickyDipole::new(potential::SsdParameters {
         epsilon: p.epsilon * energy_unit,

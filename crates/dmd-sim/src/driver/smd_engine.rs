@@ -8,9 +8,11 @@
 //! - the potential of `[[pair]]` (`rods`, `lennard-jones`, `gay-berne`) is smoothed to zero
 //!   between `r_l` and `r_u` (003 Eq. 26; default 2.5σ and 3σ, for Gay–Berne measured from
 //!   the end-to-end contact κσ₀) and integrated with the splitting of [`smd::Integrator`];
-//!   its terraces are not used;
+//!   its terraces are not used; `ssd-e` water, which switches itself off at 9 Å, is
+//!   integrated as it is ([`smd::Rigid`]), the molecules rigid asymmetric tops;
 //! - the initial state is the event-driven engine's own (lattice or file, Maxwell–Boltzmann
-//!   velocities, orientations and equipartitioned angular velocities from the same seed);
+//!   velocities, orientations or attitudes and equipartitioned angular velocities from the
+//!   same seed);
 //! - equilibration: with an Andersen thermostat, velocity rescaling to the bath temperature
 //!   once per mean Andersen collision time `1/rate` (a deterministic thermostat in place of a
 //!   stochastic one: both only prepare the state; production is NVE in both engines);
@@ -28,15 +30,21 @@
 
 use std::path::Path;
 
-use glam::DVec3;
-use potential::{GayBerne, LennardJones, LjRod, PairPotential, Smoothed};
+use glam::{DMat3, DQuat, DVec3};
+use potential::{GayBerne, LennardJones, LjRod, Smoothed, SoftStickyDipole};
+use rand::SeedableRng;
+use rand_xoshiro::Xoshiro256PlusPlus;
 use serde::Serialize;
-use smd::{BodyModel, Integrator, Observer, Settings, SmdError, Snapshot, System};
+use smd::{
+    BodyModel, Integrator, Interaction, Observer, Rigid, Settings, SmdError, Snapshot, System,
+};
 
 use crate::analysis::observable::{Correlations, Observers, Rdf, Series};
-use crate::analysis::output::{OutputError, Trajectory, axis_quaternion, write_atomically};
+use crate::analysis::output::{
+    Drawing, Layout, OutputError, Trajectory, axis_quaternion, write_atomically,
+};
 use crate::config::init::{Configuration, lattice, maxwell_boltzmann, read_orientations, read_xyz};
-use crate::config::rods::{equipartitioned_omegas, random_axes};
+use crate::config::rods::{equipartitioned_omegas, random_attitudes, random_axes, ssd_e};
 pub use crate::config::scene::{Engine, SmdSpec, SmoothingSpec};
 use crate::config::scene::{
     Orientations, Positions, PotentialSpec, Scene, SceneError, ThermostatKind, UnitSystem,
@@ -46,12 +54,14 @@ use crate::config::units::Units;
 use crate::driver::reporting::{Quiet, Reporter, RunError, thread_cpu_seconds};
 use crate::engine::body::Body;
 use crate::engine::simulation::{Progress, Sampler, Stop, View};
+use crate::models::rotor::{Rotor, Top, TopInertia};
 
-/// The pair potential of an smd run, with its length scale.
+/// The pair potential of an smd run: smoothed by the window, or (SSD/E) as it is.
 enum Smooth {
     Lj(LennardJones),
     Rod(LjRod),
     Gb(GayBerne),
+    Ssd(SoftStickyDipole),
 }
 
 /// What an smd run wrote to `summary.json`. The fields it shares with the event-driven
@@ -61,7 +71,7 @@ enum Smooth {
 pub struct SmdSummary {
     /// `smd`.
     pub engine: String,
-    /// Interaction model (`smd-rods`, `smd-lennard-jones`, `smd-gay-berne`).
+    /// Interaction model (`smd-rods`, `smd-lennard-jones`, `smd-gay-berne`, `smd-ssd-e`).
     pub model: String,
     /// `reduced` or `molecular`.
     pub units: String,
@@ -85,7 +95,7 @@ pub struct SmdSummary {
     pub temperature_start: f64,
     /// Mean translational temperature.
     pub translational_temperature: f64,
-    /// Mean rotational temperature (rods).
+    /// Mean rotational temperature (rods and tops).
     pub rotational_temperature: Option<f64>,
     /// Mean virial pressure `(N kT_t + W/3)/V` of the smoothed potential.
     pub pressure: f64,
@@ -144,7 +154,8 @@ pub struct SmdSummary {
     pub steps_per_build: f64,
     /// The Verlet-list skin.
     pub skin: f64,
-    /// The smoothing window `[r_l, r_u]` (003 Eq. 26).
+    /// The smoothing window `[r_l, r_u]` (003 Eq. 26); for SSD/E its own switch, from where
+    /// it starts to the cut-off.
     pub smoothing: [f64; 2],
     /// Self-diffusion coefficient from the MSD slope (when `output.msd` is on).
     pub diffusion_msd: Option<f64>,
@@ -254,7 +265,26 @@ pub fn run_with(
     let masses = vec![species.mass; n];
     let velocities = maxwell_boltzmann(&masses, kt, scene.seed);
     let rods = pot.is_anisotropic();
-    let (body, orientations, ang_mom) = if rods {
+    let (body, orientations, ang_mom) = if pot.is_rigid() {
+        let moments = species.moments.expect("checked: tops have moments");
+        let inertia = TopInertia::new(DVec3::from(moments))
+            .map_err(|e| SceneError::invalid("species.moments", e))?;
+        let (poses, omegas) = top_start(scene, &inertia, n);
+        let principal = inertia.principal();
+        // L = R (I ∘ ω_body), with ω_body = R⁻¹ ω.
+        let l = poses
+            .iter()
+            .zip(&omegas)
+            .map(|(&q, &w)| q * (principal * (q.inverse() * w)))
+            .collect();
+        (
+            // The body frame is the principal frame SSD/E reads; its z (the dipole) is the
+            // axis the orientational correlations follow, as in the event-driven engine.
+            BodyModel::rigid(species.mass, principal.to_array(), DVec3::Z).map_err(smd_error)?,
+            smd::Orientations::Rotations(poses.iter().map(|&q| DMat3::from_quat(q)).collect()),
+            l,
+        )
+    } else if rods {
         let inertia = species.inertia.expect("checked: rods have inertia");
         let axes = match scene.init.orientations {
             Orientations::Random => random_axes(n, scene.seed),
@@ -326,7 +356,9 @@ pub fn run_with(
             system,
             Smooth::Lj(LennardJones::new(epsilon, sigma).map_err(pot_err)?),
         ),
-        PotentialSpec::SsdE { .. } => unreachable!("checked: smd_spec::check refuses ssd-e"),
+        PotentialSpec::SsdE { energy_unit } => {
+            job.go(system, Smooth::Ssd(ssd_e(energy_unit).map_err(pot_err)?))
+        }
         PotentialSpec::GayBerne {
             sigma0,
             epsilon0,
@@ -341,6 +373,35 @@ pub fn run_with(
             ),
         ),
     }
+}
+
+/// The attitudes (body → lab) and lab angular velocities of tops as the event-driven engine
+/// starts them (`config::rods::tops_model`): uniform on SO(3), or every body `ẑ` along
+/// `init.axis`; each body-frame component of `ω` Gaussian with variance `kT/I_k` from the
+/// same stream of the seed, all scaled to exactly `3/2 N kT`.
+fn top_start(scene: &Scene, inertia: &TopInertia, n: usize) -> (Vec<DQuat>, Vec<DVec3>) {
+    let poses: Vec<DQuat> = match scene.init.axis {
+        Some(a) => vec![DQuat::from_rotation_arc(DVec3::Z, DVec3::from(a).normalize()); n],
+        None => random_attitudes(n, scene.seed),
+    };
+    let kt = scene.init.temperature;
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(scene.seed ^ 0x0e6a_0e6a_0000_0009);
+    let mut omegas: Vec<DVec3> = poses
+        .iter()
+        .map(|&q| Top::draw(inertia, q, kt, &mut rng))
+        .collect();
+    let kinetic: f64 = omegas
+        .iter()
+        .zip(&poses)
+        .map(|(&w, &q)| Top::start(inertia, q, w).map_or(0.0, |top| top.kinetic(inertia)))
+        .sum();
+    if kinetic > 0.0 {
+        let f = (1.5 * n as f64 * kt / kinetic).sqrt();
+        for w in &mut omegas {
+            *w *= f;
+        }
+    }
+    (poses, omegas)
 }
 
 struct Job<'a> {
@@ -383,13 +444,18 @@ impl Job<'_> {
                 Smoothed::new(p, r_l, r_u).map_err(err)?,
                 "smd-gay-berne",
             ),
+            Smooth::Ssd(p) => self.integrate(
+                system,
+                Rigid::new(p, p.cutoff()).map_err(smd_error)?,
+                "smd-ssd-e",
+            ),
         }
     }
 
-    fn integrate<P: PairPotential>(
+    fn integrate<F: Interaction>(
         mut self,
         system: System,
-        pot: Smoothed<P>,
+        pot: F,
         model: &str,
     ) -> Result<SmdSummary, RunError> {
         let scene = self.scene;
@@ -485,8 +551,18 @@ impl Job<'_> {
             observers.series = Some(Series::default());
         }
         if let (Some(_), Some(dir)) = (&o.trajectory, self.out) {
-            let names = scene.species.iter().map(|s| s.name.clone()).collect();
-            observers.trajectory = Some(Trajectory::create(&dir.join("trajectory.xyz"), names)?);
+            let names: Vec<String> = scene.species.iter().map(|s| s.name.clone()).collect();
+            let mut trajectory = Trajectory::create(&dir.join("trajectory.xyz"), names.clone())?;
+            if matches!(md.system().body(), BodyModel::Rigid { .. }) {
+                // Water drawn as the event-driven engine draws it: its atoms' extent.
+                let (centres, diameters) = crate::config::rods::water_drawing();
+                trajectory = trajectory.with_layout(Layout {
+                    drawings: vec![Drawing::Sites { centres, diameters }; names.len()],
+                    species: names,
+                    kinds: Vec::new(),
+                });
+            }
+            observers.trajectory = Some(trajectory);
         }
         // About 10⁴ rows of the energy series for the summary's means, drift and fluctuation.
         let stride = (self.production_steps / 10_000).max(1);
@@ -738,9 +814,17 @@ impl Observer for Bridge<'_> {
                 observers.sample(&view);
             }
             if frame {
-                // The rods' attitudes as the terraced model gives them (body z along the
-                // axis), so that both engines write the same orientation column.
-                let attitudes = view.axes.iter().map(|&a| axis_quaternion(a)).collect();
+                // Tops: their attitudes; rods: as the terraced model gives them (body z along
+                // the axis), so that both engines write the same orientation column.
+                let attitudes = if s.system.orientations().is_empty() {
+                    view.axes.iter().map(|&a| axis_quaternion(a)).collect()
+                } else {
+                    s.system
+                        .orientations()
+                        .iter()
+                        .map(|r| DQuat::from_mat3(r).normalize())
+                        .collect()
+                };
                 observers.frame(0, &View { attitudes, ..view });
             }
             self.observers = observers;

@@ -130,7 +130,7 @@ fn rod_setup(n: usize) -> (LjRod, f64, Setup) {
 
 const ROD_SKIN: f64 = 2.0;
 
-fn rods(r: &mut Report, args: &Args) -> Option<Integrator<LjRod>> {
+fn rods(r: &mut Report, args: &Args) -> Option<Integrator<Smoothed<LjRod>>> {
     let n = 512;
     let (rod, kt, setup) = rod_setup(n);
     let (eq_ps, run_ps, cost_ps) = if args.quick {
@@ -439,7 +439,7 @@ fn rods(r: &mut Report, args: &Args) -> Option<Integrator<LjRod>> {
 // ---------------------------------------------------------------------------------------------
 // 2. Time reversibility.
 
-fn reversibility(r: &mut Report, base: &Integrator<LjRod>) {
+fn reversibility(r: &mut Report, base: &Integrator<Smoothed<LjRod>>) {
     r.md += "### Time reversibility\n\n\
         The equilibrated rods above at 1.8 fs: k steps out, momenta reversed, k steps back, \
         compared with the start (max over bodies; positions unwrapped). An exact splitting is \
@@ -499,7 +499,7 @@ fn reversibility(r: &mut Report, base: &Integrator<LjRod>) {
 // ---------------------------------------------------------------------------------------------
 // 3. Stability: large steps fail loudly.
 
-fn stability(r: &mut Report, base: &Integrator<LjRod>) {
+fn stability(r: &mut Report, base: &Integrator<Smoothed<LjRod>>) {
     r.md += "### Stability: what a step that is too large does\n\n\
         A blown-up integration must be an error, never NaN output. Each case below must stop \
         with `SmdError::Unstable` or `SmdError::Overlap` (the message is quoted).\n\n\

@@ -6,7 +6,7 @@ use smd::{BodyModel, Integrator, Lattice, Settings, Setup, System, units};
 
 /// The paper's rods (kJ/mol, Å, g/mol) at ρ* = 0.5, T* = 1.4: `n` of them on a simple cubic
 /// lattice, equilibrated for `eq_steps` steps of 1.8 fs with velocity rescaling.
-pub fn rods(n: usize, eq_steps: u64, seed: u64) -> Integrator<LjRod> {
+pub fn rods(n: usize, eq_steps: u64, seed: u64) -> Integrator<Smoothed<LjRod>> {
     let rod = LjRod::paper();
     let kt = 1.4 * rod.epsilon();
     let setup = Setup {
@@ -30,7 +30,7 @@ pub fn rods(n: usize, eq_steps: u64, seed: u64) -> Integrator<LjRod> {
 }
 
 /// Lennard-Jones spheres in reduced units at ρ* = 0.5, T* = 2 (fcc), equilibrated.
-pub fn lj(n: usize, eq_steps: u64, dt: f64) -> Integrator<LennardJones> {
+pub fn lj(n: usize, eq_steps: u64, dt: f64) -> Integrator<Smoothed<LennardJones>> {
     let setup = Setup::new(n, 0.5, BodyModel::sphere(1.0).unwrap(), 2.0);
     let mut md = Integrator::new(
         System::new(&setup).unwrap(),
@@ -43,7 +43,10 @@ pub fn lj(n: usize, eq_steps: u64, dt: f64) -> Integrator<LennardJones> {
 }
 
 /// The same system and potential with another time step (same state, fresh lists).
-pub fn with_dt<P: potential::PairPotential + Clone>(md: &Integrator<P>, dt: f64) -> Integrator<P> {
+pub fn with_dt<P: potential::PairPotential + Clone>(
+    md: &Integrator<Smoothed<P>>,
+    dt: f64,
+) -> Integrator<Smoothed<P>> {
     Integrator::new(
         md.system().clone(),
         md.potential().clone(),
@@ -54,7 +57,7 @@ pub fn with_dt<P: potential::PairPotential + Clone>(md: &Integrator<P>, dt: f64)
 
 /// Total energies sampled every `every` steps over `steps` steps.
 pub fn energies<P: potential::PairPotential>(
-    md: &mut Integrator<P>,
+    md: &mut Integrator<Smoothed<P>>,
     steps: u64,
     every: u64,
 ) -> Vec<f64> {
