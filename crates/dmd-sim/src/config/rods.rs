@@ -276,33 +276,8 @@ pub fn tops_model(
                 .map_err(|e| SceneError::invalid("species.moments", e))
         })
         .collect::<Result<_, _>>()?;
-    let n = body_species.len();
-    let poses: Vec<glam::DQuat> = match scene.init.axis {
-        Some(a) => vec![glam::DQuat::from_rotation_arc(DVec3::Z, DVec3::from(a).normalize()); n],
-        None => random_attitudes(n, scene.seed),
-    };
-    let kt = scene.init.temperature;
-    let mut rng = Xoshiro256PlusPlus::seed_from_u64(scene.seed ^ 0x0e6a_0e6a_0000_0009);
-    let mut omegas: Vec<DVec3> = poses
-        .iter()
-        .zip(body_species)
-        .map(|(&q, &s)| Top::draw(&species[s as usize].inertia, q, kt, &mut rng))
-        .collect();
-    let kinetic: f64 = omegas
-        .iter()
-        .zip(&poses)
-        .zip(body_species)
-        .map(|((&w, &q), &s)| {
-            let inertia = &species[s as usize].inertia;
-            Top::start(inertia, q, w).map_or(0.0, |top| top.kinetic(inertia))
-        })
-        .sum();
-    if kinetic > 0.0 {
-        let f = (1.5 * n as f64 * kt / kinetic).sqrt();
-        for w in &mut omegas {
-            *w *= f;
-        }
-    }
+    let inertia: Vec<TopInertia> = species.iter().map(|s| s.inertia).collect();
+    let (poses, omegas) = tops_start(scene, &inertia, body_species);
     Terraced::new(
         species,
         tables,
@@ -314,6 +289,45 @@ pub fn tops_model(
         scene.seed ^ 0x5ea2_c400_0000_0007,
     )
     .map_err(|e| SceneError::invalid("search", e.to_string()))
+}
+
+/// The attitudes (body → lab) and lab angular velocities of rigid tops at the start of a run
+/// (both engines): uniform on SO(3), or every body `ẑ` along `init.axis`; each body-frame
+/// component of `ω` Gaussian with variance `kT/I_k` (the moments of `inertia[species]`) from
+/// its own stream of the seed, all scaled to exactly `3/2 N kT`.
+pub fn tops_start(
+    scene: &Scene,
+    inertia: &[TopInertia],
+    body_species: &[u32],
+) -> (Vec<glam::DQuat>, Vec<DVec3>) {
+    let n = body_species.len();
+    let poses: Vec<glam::DQuat> = match scene.init.axis {
+        Some(a) => vec![glam::DQuat::from_rotation_arc(DVec3::Z, DVec3::from(a).normalize()); n],
+        None => random_attitudes(n, scene.seed),
+    };
+    let kt = scene.init.temperature;
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(scene.seed ^ 0x0e6a_0e6a_0000_0009);
+    let mut omegas: Vec<DVec3> = poses
+        .iter()
+        .zip(body_species)
+        .map(|(&q, &s)| Top::draw(&inertia[s as usize], q, kt, &mut rng))
+        .collect();
+    let kinetic: f64 = omegas
+        .iter()
+        .zip(&poses)
+        .zip(body_species)
+        .map(|((&w, &q), &s)| {
+            let inertia = &inertia[s as usize];
+            Top::start(inertia, q, w).map_or(0.0, |top| top.kinetic(inertia))
+        })
+        .sum();
+    if kinetic > 0.0 {
+        let f = (1.5 * n as f64 * kt / kinetic).sqrt();
+        for w in &mut omegas {
+            *w *= f;
+        }
+    }
+    (poses, omegas)
 }
 
 /// How trajectories draw a water molecule: its oxygen and hydrogens in the body frame of

@@ -32,8 +32,6 @@ use std::path::Path;
 
 use glam::{DMat3, DQuat, DVec3};
 use potential::{GayBerne, LennardJones, LjRod, Smoothed, SoftStickyDipole};
-use rand::SeedableRng;
-use rand_xoshiro::Xoshiro256PlusPlus;
 use serde::Serialize;
 use smd::{
     BodyModel, Integrator, Interaction, Observer, Rigid, Settings, SmdError, Snapshot, System,
@@ -44,7 +42,7 @@ use crate::analysis::output::{
     Drawing, Layout, OutputError, Trajectory, axis_quaternion, write_atomically,
 };
 use crate::config::init::{Configuration, lattice, maxwell_boltzmann, read_orientations, read_xyz};
-use crate::config::rods::{equipartitioned_omegas, random_attitudes, random_axes, ssd_e};
+use crate::config::rods::{equipartitioned_omegas, random_axes, ssd_e, tops_start};
 pub use crate::config::scene::{Engine, SmdSpec, SmoothingSpec};
 use crate::config::scene::{
     Orientations, Positions, PotentialSpec, Scene, SceneError, ThermostatKind, UnitSystem,
@@ -54,7 +52,7 @@ use crate::config::units::Units;
 use crate::driver::reporting::{Quiet, Reporter, RunError, thread_cpu_seconds};
 use crate::engine::body::Body;
 use crate::engine::simulation::{Progress, Sampler, Stop, View};
-use crate::models::rotor::{Rotor, Top, TopInertia};
+use crate::models::rotor::TopInertia;
 
 /// The pair potential of an smd run: smoothed by the window, or (SSD/E) as it is.
 enum Smooth {
@@ -269,7 +267,7 @@ pub fn run_with(
         let moments = species.moments.expect("checked: tops have moments");
         let inertia = TopInertia::new(DVec3::from(moments))
             .map_err(|e| SceneError::invalid("species.moments", e))?;
-        let (poses, omegas) = top_start(scene, &inertia, n);
+        let (poses, omegas) = tops_start(scene, &[inertia], &vec![0; n]);
         let principal = inertia.principal();
         // L = R (I ∘ ω_body), with ω_body = R⁻¹ ω.
         let l = poses
@@ -373,35 +371,6 @@ pub fn run_with(
             ),
         ),
     }
-}
-
-/// The attitudes (body → lab) and lab angular velocities of tops as the event-driven engine
-/// starts them (`config::rods::tops_model`): uniform on SO(3), or every body `ẑ` along
-/// `init.axis`; each body-frame component of `ω` Gaussian with variance `kT/I_k` from the
-/// same stream of the seed, all scaled to exactly `3/2 N kT`.
-fn top_start(scene: &Scene, inertia: &TopInertia, n: usize) -> (Vec<DQuat>, Vec<DVec3>) {
-    let poses: Vec<DQuat> = match scene.init.axis {
-        Some(a) => vec![DQuat::from_rotation_arc(DVec3::Z, DVec3::from(a).normalize()); n],
-        None => random_attitudes(n, scene.seed),
-    };
-    let kt = scene.init.temperature;
-    let mut rng = Xoshiro256PlusPlus::seed_from_u64(scene.seed ^ 0x0e6a_0e6a_0000_0009);
-    let mut omegas: Vec<DVec3> = poses
-        .iter()
-        .map(|&q| Top::draw(inertia, q, kt, &mut rng))
-        .collect();
-    let kinetic: f64 = omegas
-        .iter()
-        .zip(&poses)
-        .map(|(&w, &q)| Top::start(inertia, q, w).map_or(0.0, |top| top.kinetic(inertia)))
-        .sum();
-    if kinetic > 0.0 {
-        let f = (1.5 * n as f64 * kt / kinetic).sqrt();
-        for w in &mut omegas {
-            *w *= f;
-        }
-    }
-    (poses, omegas)
 }
 
 struct Job<'a> {
