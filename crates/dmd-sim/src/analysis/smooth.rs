@@ -34,6 +34,24 @@ pub struct SmoothSums {
     pub virial: f64,
 }
 
+impl SmoothSums {
+    /// `U` and `W = r_ij·F_ij` of one pair at `r_ij` from its evaluation; NaN for a pair the
+    /// potential has no finite force for.
+    #[inline]
+    fn of_pair(r_ij: DVec3, eval: Result<potential::PairEval, potential::PotentialError>) -> Self {
+        match eval {
+            Ok(ev) => SmoothSums {
+                energy: ev.energy,
+                virial: r_ij.dot(ev.force),
+            },
+            Err(_) => SmoothSums {
+                energy: f64::NAN,
+                virial: f64::NAN,
+            },
+        }
+    }
+}
+
 /// Something that evaluates the smooth potential of a sampled configuration (object safe, so
 /// the observers need not know the potential's type).
 pub trait Evaluate: std::fmt::Debug + Send {
@@ -96,16 +114,7 @@ impl<P: PairPotential> Estimator<P> {
                 virial: 0.0,
             };
         }
-        match p.evaluate(&PairGeometry::new(r_ij, s_i, s_j)) {
-            Ok(ev) => SmoothSums {
-                energy: ev.energy,
-                virial: r_ij.dot(ev.force),
-            },
-            Err(_) => SmoothSums {
-                energy: f64::NAN,
-                virial: f64::NAN,
-            },
-        }
+        SmoothSums::of_pair(r_ij, p.evaluate(&PairGeometry::new(r_ij, s_i, s_j)))
     }
 }
 
@@ -196,16 +205,7 @@ impl<P: RigidPairPotential> RigidEstimator<P> {
     #[inline]
     pub fn pair_sums(&self, a: u32, b: u32, r_ij: DVec3, q_i: DQuat, q_j: DQuat) -> SmoothSums {
         let p = &self.pots[self.table[a as usize * self.n_species + b as usize] as usize];
-        match p.evaluate(&RigidGeometry::new(r_ij, q_i, q_j)) {
-            Ok(ev) => SmoothSums {
-                energy: ev.energy,
-                virial: r_ij.dot(ev.force),
-            },
-            Err(_) => SmoothSums {
-                energy: f64::NAN,
-                virial: f64::NAN,
-            },
-        }
+        SmoothSums::of_pair(r_ij, p.evaluate(&RigidGeometry::new(r_ij, q_i, q_j)))
     }
 }
 

@@ -154,7 +154,7 @@ impl Plan {
                     };
                     let water = Rigid(ssd_e(energy_unit).map_err(|e| potential_error(k, e))?);
                     let t = p.terraces.as_ref().expect("checked");
-                    let map = rigid_terrace_map(
+                    let map = plain_terrace_map(
                         k,
                         potential::RigidPairPotential::minimum(&water.0),
                         t,
@@ -224,10 +224,10 @@ fn terrace_options(t: &TerraceSpec) -> TerraceOptions {
     opts
 }
 
-/// The terrace map of a potential known only by its (lower bound on the) `minimum`: the
-/// paper's evenly spaced levels, or explicit levels with their energies (the placement and
-/// step-energy rules need a radial profile, refused with the scene).
-fn rigid_terrace_map(
+/// The terrace map that needs nothing of the potential but its (lower bound on the)
+/// `minimum`: the paper's evenly spaced levels, or explicit levels with their energies (the
+/// placement and step-energy rules need a radial profile: [`terrace_map`]).
+fn plain_terrace_map(
     k: usize,
     minimum: f64,
     t: &TerraceSpec,
@@ -411,6 +411,18 @@ fn terrace_map<P: PairPotential, F: Fn(f64) -> f64>(
     kt: f64,
     scale: f64,
 ) -> Result<TerraceMap, SceneError> {
+    // The paper's evenly spaced map and explicit levels with energies need only the minimum.
+    let plain = match &t.levels {
+        Some(_) => t.energies.is_some(),
+        None => {
+            t.placement == PlacementSpec::EqualEnergy
+                && t.step_energy == StepEnergySpec::Equal
+                && t.outermost.is_none()
+        }
+    };
+    if plain {
+        return plain_terrace_map(k, pot.minimum(), t, kt, scale);
+    }
     let err = |e| terrace_error(k, e, scale);
     let opts = terrace_options(t);
     let step = t.step.or(t.step_kt.map(|x| x * kt));
@@ -429,22 +441,12 @@ fn terrace_map<P: PairPotential, F: Fn(f64) -> f64>(
         })
     };
     if let Some(levels) = &t.levels {
-        return match &t.energies {
-            Some(e) => TerraceMap::from_levels(pot, levels, Steps::Energies(e), &opts).map_err(err),
-            None => {
-                let set = LevelSet::new(pot.minimum(), levels, &opts).map_err(err)?;
-                let energies = rule(1.0).energies(profile_needed()?, &set).map_err(err)?;
-                TerraceMap::new(set, Steps::Energies(&energies)).map_err(err)
-            }
-        };
+        // Without energies (`plain` took those): a step-energy rule on the profile.
+        let set = LevelSet::new(pot.minimum(), levels, &opts).map_err(err)?;
+        let energies = rule(1.0).energies(profile_needed()?, &set).map_err(err)?;
+        return TerraceMap::new(set, Steps::Energies(&energies)).map_err(err);
     }
     let step = step.expect("checked: step, step_kt or levels");
-    if t.placement == PlacementSpec::EqualEnergy
-        && t.step_energy == StepEnergySpec::Equal
-        && t.outermost.is_none()
-    {
-        return TerraceMap::evenly_spaced(pot, step, &opts).map_err(err);
-    }
     let mut layout = Layout::paper(pot.minimum(), step, &opts).map_err(err)?;
     if let Some(o) = t.outermost {
         layout = layout.with_outermost(o);
@@ -619,24 +621,42 @@ pub fn estimator<P: PairPotential + Clone + std::fmt::Debug + Send + 'static>(
         cutoff = cutoff.max(r_u);
         pots.push(((*a, *b), p));
     }
-    let half = 0.5 * lengths.min_element();
-    if cutoff >= half {
-        return match scene.output.smooth_estimators {
-            Some(true) => Err(SceneError::invalid(
-                "output.smooth_estimators",
-                format!(
-                    "the smooth potential's cut-off r_u = {cutoff} reaches half the shortest box \
-                     side {half:.6}: a body would interact with two images of another; use more \
-                     bodies or a smaller smd.smoothing.r_u"
-                ),
-            )),
-            _ => Ok(None),
-        };
+    let why = |half: f64| {
+        format!(
+            "the smooth potential's cut-off r_u = {cutoff} reaches half the shortest box side \
+             {half:.6}: a body would interact with two images of another; use more bodies or a \
+             smaller smd.smoothing.r_u"
+        )
+    };
+    if !cutoff_fits(scene, lengths, cutoff, why)? {
+        return Ok(None);
     }
     Ok(Some(Box::new(crate::analysis::smooth::Estimator::new(
         scene.species.len(),
         pots,
     ))))
+}
+
+/// Whether an estimator's `cutoff` lies below half the shortest side of a box of `lengths`
+/// (minimum image); if not, an explicit `output.smooth_estimators = true` is an error saying
+/// `why(half)`, and otherwise the run goes without the estimator.
+///
+/// # Errors
+/// [`SceneError::Invalid`] naming `output.smooth_estimators`.
+fn cutoff_fits(
+    scene: &Scene,
+    lengths: DVec3,
+    cutoff: f64,
+    why: impl FnOnce(f64) -> String,
+) -> Result<bool, SceneError> {
+    let half = 0.5 * lengths.min_element();
+    if cutoff < half {
+        return Ok(true);
+    }
+    match scene.output.smooth_estimators {
+        Some(true) => Err(SceneError::invalid("output.smooth_estimators", why(half))),
+        _ => Ok(false),
+    }
 }
 
 /// The estimator of a scene of SSD/E tops (in internal units): the terraced pairs' own smooth
@@ -658,18 +678,14 @@ pub fn tops_estimator(
         .iter()
         .map(|(_, t)| t.potential().0.cutoff())
         .fold(0.0, f64::max);
-    let half = 0.5 * lengths.min_element();
-    if cutoff >= half {
-        return match scene.output.smooth_estimators {
-            Some(true) => Err(SceneError::invalid(
-                "output.smooth_estimators",
-                format!(
-                    "the potential's cut-off {cutoff} reaches half the shortest box side \
-                     {half:.6}: a body would interact with two images of another; use more bodies"
-                ),
-            )),
-            _ => Ok(None),
-        };
+    let why = |half: f64| {
+        format!(
+            "the potential's cut-off {cutoff} reaches half the shortest box side {half:.6}: a \
+             body would interact with two images of another; use more bodies"
+        )
+    };
+    if !cutoff_fits(scene, lengths, cutoff, why)? {
+        return Ok(None);
     }
     let pots = tables
         .iter()
