@@ -4,7 +4,7 @@
 //!
 //! Arguments: `--events N` (per rule), `--quick` (CI: fewer events), `--figures DIR`.
 
-#[path = "../tests/common/mod.rs"]
+#[path = "../tests/integration/common/mod.rs"]
 mod common;
 
 use std::process::ExitCode;

@@ -202,7 +202,7 @@ fn validate(quick: bool, figures: Option<PathBuf>, r: &mut Report) -> Result<(),
         "Reduced units: site diameter σ = 1 (species 0), atom masses 1 (chains) or 3, 1, 2 \
          (triangle), kT as listed. Chains of 4 atoms with bond length 0.6σ and free bond and \
          torsion angles (6 internal degrees of freedom); site–site hard cores, square wells and a \
-         shoulder (the potentials of `tests/flexible.rs`). Internal motion by RATTLE (SHAKE \
+         shoulder (the potentials of `tests/integration/flexible.rs`). Internal motion by RATTLE (SHAKE \
          tolerance 1e-12) with cubic Hermite interpolation between steps; adaptive root search, \
          step 0.02, window 0.1. {} run. Timings are CPU seconds of one thread on a shared \
          2-core machine: noisy, for orders of magnitude only.\n",

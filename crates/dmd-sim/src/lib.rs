@@ -49,7 +49,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
-// The layers, each importing only those before it (checked by `tests/layers.rs`): engine ←
+// The layers, each importing only those before it (checked by `tests/integration/layers.rs`): engine ←
 // models ← analysis ← config ← driver ← the `dmd` binary.
 mod analysis;
 mod config;

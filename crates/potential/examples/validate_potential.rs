@@ -7,7 +7,7 @@
 //! Arguments: `--quick` (CI: fewer geometries and steps), `--figures DIR`. Prints a Markdown
 //! fragment; exits non-zero if a check fails. Timings are reported, never checked.
 
-#[path = "../tests/common/mod.rs"]
+#[path = "../tests/integration/common/mod.rs"]
 mod common;
 
 use std::fmt::Write as _;

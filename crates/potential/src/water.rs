@@ -188,7 +188,7 @@ impl SsdParameters {
 /// let water = SoftStickyDipole::ssd_e();
 /// let g = SoftStickyDipole::hydrogen_bond(2.75); // donor i, acceptor j, 2.75 Å apart
 /// let e = water.evaluate(&g)?;
-/// assert!((e.energy - -7.579_38).abs() < 1e-5); // kJ/mol, by hand in tests/rigid_water.rs
+/// assert!((e.energy - -7.579_38).abs() < 1e-5); // kJ/mol, by hand in tests/integration/rigid_water.rs
 /// assert!(e.torque_imbalance(g.r_ij) < 1e-14); // 003 Eq. 6
 /// assert!(water.minimum() <= e.energy && water.reach(-1.0)? <= water.cutoff());
 /// # Ok::<(), potential::PotentialError>(())

@@ -10,7 +10,7 @@
 //!    values are checked against each other ([`SceneError::Invalid`], again naming the key).
 //!
 //! Every key is documented in `docs/USER-GUIDE.md`; the corpus of bad scenes in
-//! `tests/scene_errors.rs` pins the message of each kind of mistake.
+//! `tests/integration/scene_errors.rs` pins the message of each kind of mistake.
 
 use std::fmt;
 use std::path::PathBuf;

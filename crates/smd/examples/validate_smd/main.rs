@@ -303,7 +303,7 @@ fn rods(r: &mut Report, args: &Args) -> Option<Integrator<Smoothed<LjRod>>> {
             r.md,
             "- dt² law: std(E) at {} fs / at {} fs = {ratio:.2} (second order: → 4 as dt → 0; \
              accepted 3–5.5, the runs' trajectories decorrelate so the ratio carries sampling \
-             noise; the short-window test in `tests/conservation.rs` measures 3.99): {v}",
+             noise; the short-window test in `tests/integration/conservation.rs` measures 3.99): {v}",
             a.dt_fs, b.dt_fs
         );
     }

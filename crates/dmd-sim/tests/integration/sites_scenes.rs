@@ -2,8 +2,6 @@
 //! three shipped scenes shortened, their molecules and tables against `sites::molecules`, the
 //! constrained rule, aligned starts, outputs, units and determinism.
 
-mod support;
-
 use std::path::Path;
 
 use dmd_sim::potential::Potentials;
@@ -12,7 +10,8 @@ use dmd_sim::scene::Scene;
 use dmd_sim::site_scene::SitesPlan;
 use dmd_sim::sites::molecules;
 
-use support::{run_shipped as run, shipped};
+use crate::support;
+use crate::support::{run_shipped as run, shipped};
 
 /// The same step tables (the derived levels hold NaN for absent steps, so no `==`).
 fn assert_same_tables(a: &Potentials, b: &Potentials) {

@@ -3,13 +3,11 @@
 //! same files), checked for conservation, run as an HMC chain, and its trajectory read back. A
 //! scene added to `scenes/` is covered without a change here.
 
-mod support;
-
 use dmd_sim::checkpoint::{self, Every};
 use dmd_sim::run::{RunError, Summary};
 use dmd_sim::scene::Scene;
 
-use support::{
+use crate::support::{
     assert_conserved, options, physics, resume, run_text, same_files, scratch, shipped_scenes,
 };
 

@@ -3,7 +3,7 @@
 //! argument.
 
 #[allow(dead_code)]
-#[path = "../examples/hold.rs"]
+#[path = "../../examples/hold.rs"]
 mod hold;
 
 fn run(args: &str) -> Result<String, String> {

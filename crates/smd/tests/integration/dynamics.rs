@@ -1,8 +1,7 @@
 //! Reversibility, conservation of momentum and angular momentum, the linear-rotor invariant,
 //! the forces against a brute-force sum, and loud failure of unstable steps.
 
-mod common;
-
+use crate::common;
 use glam::{DMat3, DQuat, DVec3};
 use potential::{LennardJones, LjRod, PairGeometry, PairPotential, Smoothed};
 use rand::{RngExt, SeedableRng};

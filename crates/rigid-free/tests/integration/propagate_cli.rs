@@ -2,7 +2,7 @@
 //! a module): output format, agreement with the library, and one message per bad argument.
 
 #[allow(dead_code)]
-#[path = "../examples/propagate.rs"]
+#[path = "../../examples/propagate.rs"]
 mod propagate;
 
 fn run(args: &str) -> Result<String, String> {

@@ -10,7 +10,7 @@ use potential::{
 };
 use proptest::prelude::*;
 
-const LJ_B2: &str = include_str!("../reference/lj_b2.txt");
+const LJ_B2: &str = include_str!("../../reference/lj_b2.txt");
 
 fn lj() -> LennardJones {
     LennardJones::new(1.0, 1.0).unwrap()

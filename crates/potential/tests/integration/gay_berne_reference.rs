@@ -5,7 +5,7 @@
 use glam::DVec3;
 use potential::{GayBerne, PairGeometry, PairPotential};
 
-const TABLE: &str = include_str!("../reference/gay_berne.txt");
+const TABLE: &str = include_str!("../../reference/gay_berne.txt");
 
 #[test]
 fn energy_force_and_torques_match_the_mpmath_reference() {

@@ -2,12 +2,11 @@
 //! (000 §IV.A, through the `Z` matrix) and as a rigid body with its inertia tensor (000 §IV.B)
 //! must leave every atom with the same velocity, and the same `S`.
 
-mod common;
-
+use crate::common;
+use crate::common::*;
 use collide::{
     ConstraintSolver, Contact, LinearBody, Molecule, Particle, RigidBody, Velocity, contact,
 };
-use common::*;
 use glam::DVec3;
 use proptest::prelude::*;
 

@@ -2,15 +2,14 @@
 //! runs them: the shipped chains shortened (energy, bonds, anomalies, degrees of freedom), the
 //! defaults of `[rattle]`, a molecule the bonds hold rigid, and determinism.
 
-mod support;
-
 use std::path::Path;
 
 use dmd_sim::flexible_scene::{FlexiblePlan, STEP_BOND_FRACTION, rattle_settings};
 use dmd_sim::run::{Quiet, Summary, run_scene};
 use dmd_sim::scene::Scene;
 
-use support::{run_shipped as run, shipped};
+use crate::support;
+use crate::support::{run_shipped as run, shipped};
 
 fn assert_healthy(s: &Summary, what: &str) {
     assert_eq!(s.model, "semi-flexible", "{what}");

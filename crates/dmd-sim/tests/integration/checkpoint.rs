@@ -2,15 +2,14 @@
 //! run that never stopped; damaged checkpoints are refused with a clear message and nothing
 //! is overwritten.
 
-mod support;
-
 use std::path::PathBuf;
 use std::process::Command;
 
 use dmd_sim::checkpoint::{self, CODE_VERSION, Every, Problem, SceneSource};
 use dmd_sim::run::RunError;
 
-use support::{options, physics, resume, run_text as run, same_files};
+use crate::support;
+use crate::support::{options, physics, resume, run_text as run, same_files};
 
 /// A square well with every output, re-based every 1500 events so that checkpoints fall
 /// mid-run, an Andersen thermostat in equilibration (its generator is saved too).

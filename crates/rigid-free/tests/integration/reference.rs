@@ -17,7 +17,7 @@ struct Case {
 }
 
 fn cases() -> Vec<Case> {
-    let text = include_str!("../reference/propagator-reference.txt");
+    let text = include_str!("../../reference/propagator-reference.txt");
     let mut out: Vec<Case> = Vec::new();
     for line in text.lines() {
         if line.starts_with('#') || line.trim().is_empty() {

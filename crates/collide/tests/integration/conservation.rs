@@ -3,10 +3,9 @@
 //! constraints of molecules, and is reversible, over random states, masses (ratios up to 10⁶),
 //! inertia tensors, geometries and potential steps (tiny, huge, of either sign, hard cores).
 
-mod common;
-
+use crate::common;
+use crate::common::*;
 use collide::{ConstraintSolver, Molecule, Outcome, Velocity, contact, spheres, terrace};
-use common::*;
 use glam::DVec3;
 use proptest::prelude::*;
 

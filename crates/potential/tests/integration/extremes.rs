@@ -2,9 +2,7 @@
 //! parallel or perpendicular, huge and tiny distances. Never NaN: `energy` is a number or `+∞`,
 //! `evaluate` is finite or an `Overlap` error.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use glam::DVec3;
 use potential::{
     GayBerne, LennardJones, LjRod, PairGeometry, PairPotential, PotentialError, Smoothed,

@@ -17,7 +17,7 @@ struct Row {
 }
 
 fn rows(section: &str) -> Vec<Row> {
-    let text = include_str!("../reference/elliptic-reference.txt");
+    let text = include_str!("../../reference/elliptic-reference.txt");
     let mut out = Vec::new();
     let mut current = "";
     for line in text.lines() {

@@ -1,8 +1,7 @@
 //! Energy: fluctuation against the time step, drift at the paper's step.
 
-mod common;
-
-use common::{energies, std_dev, with_dt};
+use crate::common;
+use crate::common::{energies, std_dev, with_dt};
 use smd::units;
 
 /// Ratio of std(E) at `dt` to std(E) at `dt/2` from the same state, sampled at the same

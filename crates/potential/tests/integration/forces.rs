@@ -1,9 +1,7 @@
 //! Forces and torques of every potential against finite differences of its energy, the
 //! angular-momentum balance (003 Eq. 6), invariances, the pair symmetry, and `U̇` (003 Eq. 12).
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use glam::{DQuat, DVec3};
 use potential::{LennardJones, LjRod, PairGeometry, PairPotential};
 

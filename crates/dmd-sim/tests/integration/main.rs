@@ -1,0 +1,24 @@
+//! The integration tests of this crate, gathered into one test binary: one link instead of one
+//! per file, which is most of a fresh build's time.
+
+mod chains;
+mod checkpoint;
+mod cli_robust;
+mod every_scene;
+mod flexible;
+mod flexible_scenes;
+mod gsd_output;
+mod hmc;
+mod layers;
+mod physics;
+mod reference;
+mod rods;
+mod rods_scenes;
+mod scene_errors;
+mod sites;
+mod sites_scenes;
+mod smd_engine;
+mod smooth;
+mod support;
+mod tops;
+mod water_smd;

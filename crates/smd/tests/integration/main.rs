@@ -1,0 +1,8 @@
+//! The integration tests of this crate, gathered into one test binary: one link instead of one
+//! per file, which is most of a fresh build's time.
+
+mod common;
+mod conservation;
+mod driver;
+mod dynamics;
+mod observables;
