@@ -116,7 +116,7 @@ enum Command {
     },
 }
 
-/// The widest line the terminal output has (the progress bar and every summary line).
+/// The widest line of the header and the summary (the progress bar fits the terminal).
 const COLUMNS: usize = 100;
 
 /// The names of the scene's units on the terminal.
@@ -203,7 +203,11 @@ fn plain(x: f64) -> String {
 /// place; without an error, the mean to `digits` significant digits.
 fn pm(x: f64, error: Option<f64>, digits: usize) -> String {
     match error.filter(|e| e.is_finite() && *e > 0.0) {
-        Some(e) if x.is_finite() && (x == 0.0 || (1e-3..1e6).contains(&x.abs())) => {
+        // An error below a millionth of the mean would print a dozen meaningless digits.
+        Some(e)
+            if x.is_finite()
+                && (x == 0.0 || (1e-3..1e6).contains(&x.abs()) && e > 1e-6 * x.abs()) =>
+        {
             let decimals = (1 - e.log10().floor() as i32).max(0) as usize;
             format!("{x:.decimals$} ± {e:.decimals$}")
         }
@@ -434,11 +438,9 @@ impl Reporter for Terminal {
             .iter()
             .map(|(name, length)| {
                 let bath = match (plan.thermostat, *name) {
-                    (Some((t, _)), "equilibration") if plan.engine == "smd" => format!(
-                        " (velocity rescaling to {} {})",
-                        sig(t, 4),
-                        u.temperature
-                    ),
+                    (Some((t, _)), "equilibration") if plan.engine == "smd" => {
+                        format!(" (velocity rescaling to {} {})", sig(t, 4), u.temperature)
+                    }
                     (Some((t, _)), "equilibration") => {
                         format!(" (Andersen thermostat at {} {})", sig(t, 4), u.temperature)
                     }
@@ -503,12 +505,7 @@ impl Reporter for Terminal {
 }
 
 /// The equilibration line of a summary: its length, cost and end temperature.
-fn print_equilibration(
-    terminal: Option<&Terminal>,
-    events: u64,
-    what: &str,
-    u: &Names,
-) {
+fn print_equilibration(terminal: Option<&Terminal>, events: u64, what: &str, u: &Names) {
     match terminal.and_then(|t| t.equilibration) {
         Some((end, wall)) => line(
             "equilibration",
@@ -571,7 +568,11 @@ fn print_summary(s: &Summary, out: &Path, terminal: Option<&Terminal>) {
     list("by kind", &kinds);
     line(
         "mean free time",
-        &format!("{} {} between pair events of a body", sig(s.mean_free_time, 4), u.time),
+        &format!(
+            "{} {} between pair events of a body",
+            sig(s.mean_free_time, 4),
+            u.time
+        ),
     );
     let mut temperature = vec![format!(
         "{} {} (production started at {} {})",
@@ -601,13 +602,18 @@ fn print_summary(s: &Summary, out: &Path, terminal: Option<&Terminal>) {
     line(
         "U/N",
         &format!(
-            "{} {} (the stored levels)",
+            "{} {}{}",
             pm(
                 s.potential_energy_per_body,
                 s.potential_energy_per_body_error,
                 5
             ),
-            u.energy
+            u.energy,
+            if s.model.starts_with("terraced") {
+                " (the terraced potential)"
+            } else {
+                ""
+            }
         ),
     );
     if let (Some(e), Some(p)) = (s.potential_energy_per_body_smooth, s.pressure_smooth) {
@@ -637,7 +643,10 @@ fn print_summary(s: &Summary, out: &Path, terminal: Option<&Terminal>) {
         format!("anomalies {}", count(s.anomalies)),
     ];
     if s.search.is_some() {
-        checks.push(format!("missed events detected {}", count(s.detected_misses)));
+        checks.push(format!(
+            "missed events detected {}",
+            count(s.detected_misses)
+        ));
     }
     if let Some(m) = s.verified_misses {
         checks.push(format!("found by the verification grid {}", count(m)));
@@ -811,12 +820,25 @@ fn print_smd_summary(s: &SmdSummary, out: &Path, terminal: Option<&Terminal>) {
     );
     print_diffusion(s.diffusion_msd, s.diffusion_vacf, &u);
     if !s.ignored_keys.is_empty() {
-        let mut keys = vec![format!("ignored (event-driven only): {}", s.ignored_keys[0])];
+        let mut keys = vec![format!(
+            "ignored (event-driven only): {}",
+            s.ignored_keys[0]
+        )];
         keys.extend(s.ignored_keys[1..].iter().cloned());
         wrap("  ", 4, &keys);
     }
     for n in &s.notes {
-        wrap("  note: ", 8, std::slice::from_ref(n));
+        let words: Vec<&str> = n.split(' ').collect();
+        let mut current = "  note:".to_owned();
+        for w in words {
+            if current.chars().count() + 1 + w.chars().count() > COLUMNS {
+                println!("{current}");
+                current = "       ".to_owned();
+            }
+            current.push(' ');
+            current.push_str(w);
+        }
+        println!("{current}");
     }
     print_wrote(out, &s.files);
 }
@@ -952,13 +974,7 @@ fn main() -> ExitCode {
 }
 
 /// `dmd run` of a scene with `engine = "smd"`.
-fn run_smd(
-    scene: &Path,
-    s: &Scene,
-    base: &Path,
-    out: &Path,
-    quiet: bool,
-) -> ExitCode {
+fn run_smd(scene: &Path, s: &Scene, base: &Path, out: &Path, quiet: bool) -> ExitCode {
     let mut terminal = Terminal::new(scene, out);
     let result = if quiet {
         smd_engine::run_with(s, base, Some(out), &mut dmd_sim::run::Quiet)
@@ -1239,7 +1255,8 @@ fn print_ensemble(e: &dmd_sim::chains::Ensemble, out: &Path) {
                 "diffusion_msd" | "diffusion_vacf" => u.diffusion,
                 _ => "",
             };
-            println!("    {name:<36} {} {unit}", pm(q.mean, q.error, 6));
+            let line = format!("    {name:<36} {} {unit}", pm(q.mean, q.error, 6));
+            println!("{}", line.trim_end());
         }
     }
     println!(

@@ -40,7 +40,11 @@ fn summary(out: &Path) -> serde_json::Value {
 /// Every line within 100 columns (characters, as a terminal counts them).
 fn assert_narrow(text: &str) {
     for l in text.lines() {
-        assert!(l.chars().count() <= 100, "{} columns: {l}", l.chars().count());
+        assert!(
+            l.chars().count() <= 100,
+            "{} columns: {l}",
+            l.chars().count()
+        );
     }
 }
 
@@ -82,7 +86,9 @@ fn the_rods_run_says_what_runs_first_and_sums_up_in_molecular_units() {
         &out,
     );
     let text = String::from_utf8_lossy(&o.stdout);
-    let header = text.find("dmd: running scenes/rods-paper.toml").expect(&text);
+    let header = text
+        .find("dmd: running scenes/rods-paper.toml")
+        .expect(&text);
     let done = text.find("dmd: done").expect(&text);
     assert!(header < done, "{text}");
     let (head, tail) = text.split_at(done);
@@ -103,7 +109,7 @@ fn the_rods_run_says_what_runs_first_and_sums_up_in_molecular_units() {
         "ended at T = ",
         " K (production started at ",
         " bar, Z = ",
-        " kJ/mol (the stored levels)",
+        " kJ/mol (the terraced potential)",
         "smooth model   U/N ",
         " ps between pair events",
         " pair events per ps",
@@ -134,7 +140,7 @@ fn a_reduced_unit_run_reports_its_event_rate_per_time_unit() {
             "run",
             "scenes/square-well.toml",
             "--set",
-            "species.0.count=108",
+            "species.0.count=500",
             "--set",
             "run.equilibration_events=2000",
             "--set",
@@ -158,7 +164,10 @@ fn a_reduced_unit_run_reports_its_event_rate_per_time_unit() {
     assert_narrow(&text);
     let json = summary(&out);
     assert!(json.get("events_per_ps").is_none(), "{json}");
-    assert!(json["events_per_time_unit"].as_f64().unwrap() > 0.0, "{json}");
+    assert!(
+        json["events_per_time_unit"].as_f64().unwrap() > 0.0,
+        "{json}"
+    );
     // The series starts at the end of the first sampling interval (0.05 τ).
     let row = first_series_row(&out);
     assert!((row[0] - 0.05).abs() < 1e-12, "{row:?}");
@@ -182,7 +191,9 @@ fn the_smd_engine_says_what_runs_and_its_series_starts_with_numbers() {
         &out,
     );
     let text = String::from_utf8_lossy(&o.stdout);
-    let header = text.find("dmd: running scenes/rods-paper.toml").expect(&text);
+    let header = text
+        .find("dmd: running scenes/rods-paper.toml")
+        .expect(&text);
     let done = text.find("dmd: done (engine smd").expect(&text);
     assert!(header < done, "{text}");
     for what in [
