@@ -104,7 +104,11 @@ fn main() {
             }
             let s = run(&o);
             let pe = (s.terrace_crossings + s.reflections) as f64;
-            results[k].push((pe / s.cpu_seconds, s.events_per_cpu_second, s.events_per_ps));
+            results[k].push((
+                pe / s.cpu_seconds,
+                s.events_per_cpu_second,
+                s.pair_event_rate(),
+            ));
             eprintln!(
                 "{state} {}: {:.3e} pair events per CPU s",
                 variants[k].1,

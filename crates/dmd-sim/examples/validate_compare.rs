@@ -166,7 +166,7 @@ fn dmd_production(
         potential: sum.potential_energy_per_body,
         temperature: sum.temperature,
         pressure: sum.pressure,
-        rate: sum.events_per_ps,
+        rate: sum.pair_event_rate(),
         fluctuation: None,
         state: None,
     })
@@ -253,7 +253,7 @@ fn dmd_cost(dv: f64, eq_ps: f64, ps: f64, extra: &[String]) -> Result<(f64, f64)
     ];
     o.extend_from_slice(extra);
     let sum = scene_run(PAPER, &o, None)?;
-    Ok((sum.cpu_seconds / sum.sim_time, sum.events_per_ps))
+    Ok((sum.cpu_seconds / sum.sim_time, sum.pair_event_rate()))
 }
 
 /// Thread CPU seconds per ps of SMD integration (no observables) from `state`.

@@ -448,7 +448,7 @@ fn dmd_run(sp: &StatePoint, l: Levels, seed: u64, dir: &Path) -> Result<Measured
         temperature: s.temperature,
         rdf: rdf_of(dir),
         cost: s.cpu_seconds / s.sim_time,
-        rate: s.events_per_ps,
+        rate: s.pair_event_rate(),
         fluctuation: None,
         drift: s.relative_energy_drift,
         detected: s.detected_misses,

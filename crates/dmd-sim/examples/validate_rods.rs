@@ -326,7 +326,7 @@ fn rates(args: &Args, r: &mut Report, w: &mut String) -> Result<(), String> {
             None,
         )?;
         let paper = if dv < 0.75 { 4.7e4 } else { 3.5e4 };
-        let ratio = sum.events_per_ps / paper;
+        let ratio = sum.pair_event_rate() / paper;
         let in_well = negative_levels(dv);
         let verdict = if dv <= 1.0 {
             r.check((ratio - 1.0).abs() < 0.2 && sum.anomalies == 0)
@@ -336,7 +336,7 @@ fn rates(args: &Args, r: &mut Report, w: &mut String) -> Result<(), String> {
         writeln!(
             w,
             "| {dv} | {in_well} | {:.3e} | {paper:.1e} | {ratio:.2} | {:.2} | {:.1} | {:.3e} | {:.3e} | {verdict} |",
-            sum.events_per_ps,
+            sum.pair_event_rate(),
             sum.virtual_events as f64 / pair_events(&sum),
             sum.temperature,
             sum.pair_events_per_cpu_second,
@@ -587,7 +587,7 @@ fn terraces(args: &Args, r: &mut Report, w: &mut String, work: &Path) -> Result<
             levels_of(*dv),
             sum.potential_energy_per_body,
             sum.pressure,
-            sum.events_per_ps,
+            sum.pair_event_rate(),
             cpu_per_ps,
             err
         )
@@ -635,7 +635,7 @@ fn terraces(args: &Args, r: &mut Report, w: &mut String, work: &Path) -> Result<
                 outermost.map_or("−ΔV/2".to_owned(), |x| format!("{x}")),
                 sum.potential_energy_per_body,
                 sum.pressure,
-                sum.events_per_ps,
+                sum.pair_event_rate(),
                 cpu_per_ps,
                 err
             )
@@ -665,7 +665,7 @@ fn terraces(args: &Args, r: &mut Report, w: &mut String, work: &Path) -> Result<
     // The trend must be right: a finer step costs more events and is closer to U₀.
     let first = &rows[0].1;
     let last = &rows[rows.len() - 1].1;
-    let ok = last.events_per_ps > first.events_per_ps
+    let ok = last.pair_event_rate() > first.pair_event_rate()
         && (last.potential_energy_per_body - u0).abs()
             <= (first.potential_energy_per_body - u0).abs()
         && rows.iter().all(|(_, s)| s.anomalies == 0);
@@ -872,7 +872,7 @@ fn extremes(args: &Args, r: &mut Report, w: &mut String) -> Result<(), String> {
             w,
             "| {name} | {time} | {:.3e} | {:.3e} | {:.3e} | {:.3e} | {:.1e} | {m} | {} | {} |",
             pair_events(&cost),
-            cost.events_per_ps,
+            cost.pair_event_rate(),
             cost.pair_events_per_cpu_second,
             cost.events_per_cpu_second,
             checked.relative_energy_drift,

@@ -279,11 +279,12 @@ pub struct SeriesRow {
     pub total: f64,
     /// Instantaneous kinetic temperature.
     pub temperature: f64,
-    /// Pressure averaged over the interval since the previous sample (NaN for the first).
+    /// Pressure averaged over the interval since the previous sample.
     pub pressure: f64,
 }
 
-/// Pressure and energy time series.
+/// Pressure and energy time series: a row at every sample but the first (at the start of
+/// production), which only opens the first interval of the pressure.
 #[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub struct Series {
     rows: Vec<SeriesRow>,
@@ -295,15 +296,16 @@ impl Series {
         let n = view.bodies.len() as f64;
         let l = view.lengths;
         let volume = l.x * l.y * l.z;
-        let pressure = match self.last {
-            Some((t, w, kint)) if view.elapsed > t => {
-                let dt = view.elapsed - t;
-                let kt = 2.0 * (view.kinetic_integral - kint) / dt / view.dof;
-                (n * kt + (view.virial - w) / (3.0 * dt)) / volume
-            }
-            _ => f64::NAN,
+        // The first sample (and one at the same time as the previous) has no interval yet.
+        let last = self
+            .last
+            .replace((view.elapsed, view.virial, view.kinetic_integral));
+        let Some((t, w, kint)) = last.filter(|&(t, _, _)| view.elapsed > t) else {
+            return;
         };
-        self.last = Some((view.elapsed, view.virial, view.kinetic_integral));
+        let dt = view.elapsed - t;
+        let kt = 2.0 * (view.kinetic_integral - kint) / dt / view.dof;
+        let pressure = (n * kt + (view.virial - w) / (3.0 * dt)) / volume;
         self.rows.push(SeriesRow {
             time: view.elapsed,
             kinetic: view.kinetic,

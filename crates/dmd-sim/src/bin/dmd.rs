@@ -1,21 +1,22 @@
 //! `dmd`: run event-driven molecular dynamics scenes.
 //!
-//! `dmd run SCENE.toml --out DIR [--set KEY=VALUE]...` runs a scene, shows a progress bar on a
-//! terminal, prints a summary and writes `DIR/summary.json` plus the outputs the scene asks
-//! for. `dmd check SCENE.toml` only reads and checks the scene. `dmd run --checkpoint-every`
-//! saves `DIR/checkpoint.dmd` from time to time, and `dmd resume CHECKPOINT` continues such a
-//! run bit for bit; a scene with `[chains]` or `[sweep]` runs its jobs in parallel (issue 9).
-//! Every argument and the output folder are checked before the run (exit status 2); a folder
-//! holding another run's files needs `--force`.
+//! `dmd run SCENE.toml --out DIR [--set KEY=VALUE]...` runs a scene: it says what runs, shows a
+//! progress bar on a terminal, prints a summary in the scene's units and writes
+//! `DIR/summary.json` plus the outputs the scene asks for. `dmd check SCENE.toml` only reads and
+//! checks the scene. `dmd run --checkpoint-every` saves `DIR/checkpoint.dmd` from time to time,
+//! and `dmd resume CHECKPOINT` continues such a run bit for bit; a scene with `[chains]` or
+//! `[sweep]` runs its jobs in parallel. Every argument and the output folder are checked before
+//! the run (exit status 2); a folder holding another run's files needs `--force`.
 
 use std::io::IsTerminal;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::time::Instant;
 
 use clap::{Parser, Subcommand};
 use dmd_sim::checkpoint::{self, Every, SceneSource};
-use dmd_sim::run::{Reporter, RunOptions, Summary, run_scene_with};
-use dmd_sim::scene::Scene;
+use dmd_sim::run::{PhaseEnd, Reporter, RunOptions, RunPlan, Summary, run_scene_with};
+use dmd_sim::scene::{Scene, UnitSystem};
 use dmd_sim::simulation::{Progress, Stop};
 use dmd_sim::smd_engine::{self, Engine, SmdSummary};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -25,11 +26,19 @@ use indicatif::{ProgressBar, ProgressStyle};
 #[command(
     name = "dmd",
     version,
-    about = "Event-driven (discontinuous) molecular dynamics: hard and stepped spheres, rods and \
-             rigid bodies of any shape on terraced smooth potentials (SSD/E water among them), \
-             rigid and semi-flexible site molecules; standard MD on the same smooth potentials \
-             with --engine smd. Scenes are TOML files, described key by key in \
-             docs/USER-GUIDE.md."
+    about = "Event-driven molecular dynamics: bodies move freely between events, and at an event \
+             a pair reaching a step of its potential exchanges momentum and energy exactly.",
+    long_about = "Event-driven molecular dynamics: bodies move freely between events, and at \
+                  an event a pair reaching a step of its potential exchanges momentum and \
+                  energy exactly.\n\n\
+                  It runs hard spheres, square-well and stepped spheres (mixtures too); rigid \
+                  rods, Gay-Berne ellipsoids and rigid tops such as SSD/E water, whose smooth \
+                  potential is mapped onto energy terraces; rigid site molecules; and \
+                  semi-flexible molecules with bonds held by RATTLE. With --engine smd the \
+                  same scene runs with standard (time-step) molecular dynamics on the smooth \
+                  potential.\n\n\
+                  A scene is a TOML file; docs/USER-GUIDE.md describes every key, the units \
+                  and every output. Start with: dmd run scenes/hard-spheres.toml --out out/hs"
 )]
 struct Cli {
     #[command(subcommand)]
@@ -38,7 +47,8 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Run a scene and write DIR/summary.json and the requested outputs.
+    /// Run a scene (equilibration, then production): prints what runs, a progress bar and a
+    /// summary, and writes DIR/summary.json and the files the scene asks for.
     Run {
         /// The scene file (TOML; every key is described in docs/USER-GUIDE.md).
         scene: PathBuf,
@@ -53,12 +63,13 @@ enum Command {
         /// (standard MD on the smoothed potential).
         #[arg(long, value_parser = ["dmd", "smd"])]
         engine: Option<String>,
-        /// No progress bar and no summary on the terminal.
+        /// Print nothing but errors and warnings (no header, progress bar or summary).
         #[arg(long, short)]
         quiet: bool,
         /// Save DIR/checkpoint.dmd this often: a number of events (1e7) or a wall-clock time
-        /// (90s, 10m, 2h); saved at the next re-basing of the time origin (HMC: between
-        /// segments). `dmd resume` continues the run.
+        /// (90s, 10m, 2h), so that `dmd resume` can continue the run after a crash or a
+        /// stop. Saved at the next moment the state can be saved exactly (at most
+        /// run.rebase_events events later; HMC: between segments).
         #[arg(long, value_name = "EVENTS|TIME")]
         checkpoint_every: Option<String>,
         /// Threads for the jobs of a scene with `[chains]` or `[sweep]` (default: all cores).
@@ -73,15 +84,15 @@ enum Command {
         #[arg(long, hide = true)]
         halt_after_checkpoint: bool,
     },
-    /// Continue a run from its checkpoint (written by `dmd run --checkpoint-every`), or finish
-    /// the chains or sweep whose output folder is given.
+    /// Continue a stopped run from its checkpoint (written by `dmd run --checkpoint-every` or
+    /// when a signal stopped it), or finish the chains or sweep of an output folder.
     Resume {
         /// The checkpoint file, or the output folder of a scene with `[chains]` or `[sweep]`.
         checkpoint: PathBuf,
         /// Output folder (default: the checkpoint's folder).
         #[arg(long, short)]
         out: Option<PathBuf>,
-        /// No progress bar and no summary on the terminal.
+        /// Print nothing but errors and warnings (no header, progress bar or summary).
         #[arg(long, short)]
         quiet: bool,
         /// Change the checkpoint interval (default: the saved one).
@@ -91,7 +102,8 @@ enum Command {
         #[arg(long)]
         threads: Option<usize>,
     },
-    /// Read and check a scene (with overrides) without running it.
+    /// Read and check a scene (with its overrides) without running it, and say how many bodies
+    /// it has.
     Check {
         /// The scene file.
         scene: PathBuf,
@@ -104,15 +116,353 @@ enum Command {
     },
 }
 
-/// A progress bar on a terminal; nothing otherwise.
-struct Bar {
-    bar: Option<ProgressBar>,
-    length: Option<Stop>,
+/// The widest line of the header and the summary (the progress bar fits the terminal).
+const COLUMNS: usize = 100;
+
+/// The names of the scene's units on the terminal.
+struct Names {
+    length: &'static str,
+    time: &'static str,
+    energy: &'static str,
+    temperature: &'static str,
+    pressure: &'static str,
+    density: &'static str,
+    diffusion: &'static str,
+    /// The unit system in a few words, for the header.
+    system: &'static str,
 }
 
-impl Reporter for Bar {
+impl Names {
+    fn of(units: UnitSystem) -> Self {
+        match units {
+            UnitSystem::Molecular => Names {
+                length: "Å",
+                time: "ps",
+                energy: "kJ/mol",
+                temperature: "K",
+                pressure: "bar",
+                density: "Å⁻³",
+                diffusion: "Å²/ps",
+                system: "molecular units (Å, ps, kJ/mol, K, bar)",
+            },
+            UnitSystem::Reduced => Names {
+                length: "σ",
+                time: "τ",
+                energy: "ε",
+                temperature: "ε/k_B",
+                pressure: "ε/σ³",
+                density: "σ⁻³",
+                diffusion: "σ²/τ",
+                system: "reduced units (length σ, energy ε, k_B = 1, time τ = σ√(m/ε))",
+            },
+        }
+    }
+
+    /// The names of a summary's `units`.
+    fn of_summary(units: &str) -> Self {
+        Names::of(if units == "molecular" {
+            UnitSystem::Molecular
+        } else {
+            UnitSystem::Reduced
+        })
+    }
+}
+
+/// `x` to `digits` significant digits: plain between 10⁻³ and 10⁶, else in scientific notation.
+fn sig(x: f64, digits: usize) -> String {
+    if !x.is_finite() || x == 0.0 {
+        return format!("{x}");
+    }
+    let magnitude = x.abs().log10().floor() as i32;
+    if (-3..(digits as i32).max(1)).contains(&magnitude) {
+        let decimals = (digits as i32 - 1 - magnitude).max(0) as usize;
+        format!("{x:.decimals$}")
+    } else {
+        format!("{x:.*e}", digits.saturating_sub(1))
+    }
+}
+
+/// `x` to `digits` significant digits as [`sig`], trailing zeros dropped: `0.05`, `20`, `1.8e-3`.
+fn trimmed(x: f64, digits: usize) -> String {
+    let s = sig(x, digits);
+    match s.split_once('e') {
+        Some((m, e)) if m.contains('.') => {
+            format!("{}e{e}", m.trim_end_matches('0').trim_end_matches('.'))
+        }
+        None if s.contains('.') => s.trim_end_matches('0').trim_end_matches('.').to_owned(),
+        _ => s,
+    }
+}
+
+/// A length or time as given in a scene: up to 6 significant digits, trailing zeros dropped.
+fn plain(x: f64) -> String {
+    trimmed(x, 6)
+}
+
+/// A mean with its error: the error to two significant digits and the mean to the same decimal
+/// place; without an error, the mean to `digits` significant digits.
+fn pm(x: f64, error: Option<f64>, digits: usize) -> String {
+    match error.filter(|e| e.is_finite() && *e > 0.0) {
+        // An error below a millionth of the mean would print a dozen meaningless digits.
+        Some(e)
+            if x.is_finite()
+                && (x == 0.0 || (1e-3..1e6).contains(&x.abs()) && e > 1e-6 * x.abs()) =>
+        {
+            let decimals = (1 - e.log10().floor() as i32).max(0) as usize;
+            format!("{x:.decimals$} ± {e:.decimals$}")
+        }
+        Some(e) => format!("{} ± {}", sig(x, digits), sig(e, 2)),
+        None => sig(x, digits),
+    }
+}
+
+/// A count with thousands separated: `433,887`.
+fn count(n: u64) -> String {
+    let digits = n.to_string();
+    let mut out = String::new();
+    for (k, c) in digits.chars().enumerate() {
+        if k > 0 && (digits.len() - k).is_multiple_of(3) {
+            out.push(',');
+        }
+        out.push(c);
+    }
+    out
+}
+
+/// A wall-clock duration: `0.82 s`, `12.3 s`, `4 min 05 s`, `2 h 07 min`.
+fn duration(seconds: f64) -> String {
+    if !seconds.is_finite() {
+        return "?".to_owned();
+    }
+    if seconds < 60.0 {
+        return format!("{} s", sig(seconds, 3));
+    }
+    let s = seconds.round() as u64;
+    if s < 3600 {
+        format!("{} min {:02} s", s / 60, s % 60)
+    } else {
+        format!("{} h {:02} min", s / 3600, (s % 3600) / 60)
+    }
+}
+
+/// The length of a phase: simulated time with its unit, events, or HMC segments.
+fn span(name: &str, length: Stop, time: &str) -> String {
+    match length {
+        Stop::Time(t) => format!("{} {time}", plain(t)),
+        Stop::Events(n) if name.starts_with("hmc") => format!("{} segments", count(n)),
+        Stop::Events(n) => format!("{} events", count(n)),
+    }
+}
+
+/// What the bodies are, from the interaction model.
+fn kind(model: &str) -> &str {
+    match model {
+        "hard-spheres" => "hard spheres",
+        "stepped" => "spheres with stepped potentials",
+        "stepped (fault injection)" => "spheres with stepped potentials, fault injection",
+        "terraced-rods" => "rigid rods, terraced potential",
+        "terraced-gay-berne" => "Gay-Berne ellipsoids, terraced potential",
+        "terraced-tops" => "rigid tops, terraced potential",
+        "rigid-sites" => "rigid site molecules",
+        "semi-flexible" => "semi-flexible molecules",
+        "smd-rods" => "rigid rods, smooth potential",
+        "smd-lennard-jones" => "Lennard-Jones spheres",
+        "smd-gay-berne" => "Gay-Berne ellipsoids, smooth potential",
+        "smd-ssd-e" => "SSD/E water",
+        other => other,
+    }
+}
+
+/// A summary line: a label in a column of 15, then the text.
+fn line(label: &str, text: &str) {
+    println!("  {label:<14} {text}");
+}
+
+/// A labelled list, wrapped at [`COLUMNS`] with its items aligned.
+fn list(label: &str, items: &[String]) {
+    wrap(&format!("  {label:<14} "), 17, items);
+}
+
+/// Items joined by commas after `first`, wrapped at [`COLUMNS`] onto lines indented by
+/// `indent`.
+fn wrap(first: &str, indent: usize, items: &[String]) {
+    let mut current = first.to_owned();
+    for (k, item) in items.iter().enumerate() {
+        if k == 0 {
+            current.push_str(item);
+        } else if current.chars().count() + 2 + item.chars().count() > COLUMNS {
+            println!("{current},");
+            current = format!("{:indent$}{item}", "");
+        } else {
+            current.push_str(", ");
+            current.push_str(item);
+        }
+    }
+    println!("{current}");
+}
+
+/// The terminal side of a run: the header once the run is set up, a progress bar per phase on
+/// standard error when it is a terminal, and what the summary needs of the equilibration.
+struct Terminal {
+    scene: PathBuf,
+    out: PathBuf,
+    units: UnitSystem,
+    engine: &'static str,
+    bar: Option<ProgressBar>,
+    /// The phase under way: its name, length and wall-clock start.
+    phase: Option<(String, Stop, Instant)>,
+    /// How equilibration ended, and its wall-clock seconds.
+    equilibration: Option<(PhaseEnd, f64)>,
+    /// Wall-clock seconds of the last phase that ended.
+    last_wall: f64,
+}
+
+impl Terminal {
+    fn new(scene: &Path, out: &Path) -> Self {
+        Terminal {
+            scene: scene.to_owned(),
+            out: out.to_owned(),
+            units: UnitSystem::Reduced,
+            engine: "dmd",
+            bar: None,
+            phase: None,
+            equilibration: None,
+            last_wall: 0.0,
+        }
+    }
+
+    /// The progress text: done of total, the time left, and the rates (the time left first,
+    /// so that a narrow terminal keeps it).
+    fn message(&self, p: Progress) -> Option<(u64, String)> {
+        let (name, length, started) = self.phase.as_ref()?;
+        let wall = started.elapsed().as_secs_f64().max(1e-9);
+        let time = Names::of(self.units).time;
+        let per_hour = format!("{} {time}/h", sig(p.elapsed / wall * 3600.0, 3));
+        let what = if self.engine == "smd" {
+            "steps"
+        } else {
+            "events"
+        };
+        let per_second = format!("{} {what}/s", sig(p.events as f64 / wall, 3));
+        let (position, fraction, done, rates) = match *length {
+            Stop::Time(t) => {
+                let f = if t > 0.0 { p.elapsed / t } else { 1.0 };
+                (
+                    (f * 1000.0) as u64,
+                    f,
+                    format!("{} of {} {time}", sig(p.elapsed, 3), plain(t)),
+                    format!("{per_hour}, {per_second}"),
+                )
+            }
+            Stop::Events(n) if name.starts_with("hmc") => (
+                p.events,
+                p.events as f64 / n.max(1) as f64,
+                format!("{} of {} segments", count(p.events), count(n)),
+                format!("{} segments/s", sig(p.events as f64 / wall, 3)),
+            ),
+            Stop::Events(n) => (
+                p.events,
+                p.events as f64 / n.max(1) as f64,
+                format!("{} of {} events", count(p.events), count(n)),
+                format!("{per_second}, {per_hour}"),
+            ),
+        };
+        let eta = if fraction > 0.0 {
+            duration(wall * (1.0 - fraction).max(0.0) / fraction)
+        } else {
+            "?".to_owned()
+        };
+        Some((position, format!("{done}, eta {eta}, {rates}")))
+    }
+}
+
+impl Reporter for Terminal {
+    fn start(&mut self, plan: &RunPlan) {
+        self.units = plan.units;
+        self.engine = plan.engine;
+        let u = Names::of(plan.units);
+        println!(
+            "dmd: {} {}, output in {}",
+            if plan.resumed_in.is_some() {
+                "resuming"
+            } else {
+                "running"
+            },
+            self.scene.display(),
+            self.out.display()
+        );
+        let bodies = if plan.species.len() > 1 {
+            let parts: Vec<String> = plan
+                .species
+                .iter()
+                .map(|(name, n)| format!("{} {name}", count(*n)))
+                .collect();
+            format!(
+                "{} bodies ({}: {})",
+                count(plan.n_bodies),
+                kind(&plan.model),
+                parts.join(", ")
+            )
+        } else {
+            format!("{} bodies ({})", count(plan.n_bodies), kind(&plan.model))
+        };
+        let l = plan.box_lengths;
+        let edges = if l[0] == l[1] && l[1] == l[2] {
+            format!("box {} {}", sig(l[0], 4), u.length)
+        } else {
+            format!(
+                "box {} × {} × {} {}",
+                sig(l[0], 4),
+                sig(l[1], 4),
+                sig(l[2], 4),
+                u.length
+            )
+        };
+        wrap(
+            "  ",
+            2,
+            &[
+                bodies,
+                format!("ρ = {} {}", sig(plan.density, 4), u.density),
+                edges,
+                format!("T = {} {}", sig(plan.temperature, 4), u.temperature),
+                u.system.to_owned(),
+            ],
+        );
+        let engine = match plan.dt {
+            Some(dt) => format!("standard MD, dt = {} {}", plain(dt), u.time),
+            None => "event-driven".to_owned(),
+        };
+        let mut phases: Vec<String> = plan
+            .phases
+            .iter()
+            .map(|(name, length)| {
+                let bath = match (plan.thermostat, *name) {
+                    (Some((t, _)), "equilibration") if plan.engine == "smd" => {
+                        format!(" (velocity rescaling to {} {})", sig(t, 4), u.temperature)
+                    }
+                    (Some((t, _)), "equilibration") => {
+                        format!(" (Andersen thermostat at {} {})", sig(t, 4), u.temperature)
+                    }
+                    (Some((t, "always")), "production") => {
+                        format!(" (Andersen thermostat at {} {})", sig(t, 4), u.temperature)
+                    }
+                    (_, "production") => " (NVE)".to_owned(),
+                    _ => String::new(),
+                };
+                format!("{name} {}{bath}", span(name, *length, u.time))
+            })
+            .collect();
+        if let Some(phase) = plan.resumed_in {
+            phases.push(format!("continuing in {phase}"));
+        }
+        let mut items = vec![engine];
+        items.extend(phases);
+        wrap("  ", 2, &items);
+    }
+
     fn phase(&mut self, name: &str, length: Stop) {
-        self.length = Some(length);
+        self.phase = Some((name.to_owned(), length, Instant::now()));
         if !std::io::stderr().is_terminal() {
             return;
         }
@@ -121,115 +471,376 @@ impl Reporter for Bar {
             Stop::Time(_) => 1000,
         };
         let bar = ProgressBar::new(total);
-        let unit = match length {
-            // HMC phases count segments (issue 9).
-            Stop::Events(_) if name.starts_with("hmc") => "segments",
-            Stop::Events(_) => "events",
-            Stop::Time(_) => "‰ of the time",
-        };
         bar.set_style(
-            ProgressStyle::with_template(&format!(
-                "{{prefix:>13}} [{{bar:40}}] {{human_pos}}/{{human_len}} {unit} ({{rate}}, eta {{eta}})"
-            ))
-            .expect("a valid template")
-            .with_key(
-                "rate",
-                |state: &indicatif::ProgressState, w: &mut dyn std::fmt::Write| {
-                    let _ = write!(w, "{:.3e}/s", state.per_sec());
-                },
-            )
-            .progress_chars("=> "),
+            ProgressStyle::with_template("{prefix:>13} [{bar:16}] {wide_msg}")
+                .expect("a valid template")
+                .progress_chars("=> "),
         );
         bar.set_prefix(name.to_owned());
         self.bar = Some(bar);
     }
 
     fn progress(&mut self, p: Progress) {
-        if let (Some(bar), Some(length)) = (&self.bar, self.length) {
-            match length {
-                Stop::Events(_) => bar.set_position(p.events),
-                Stop::Time(t) => bar.set_position(((p.elapsed / t) * 1000.0) as u64),
-            }
+        if self.bar.is_none() {
+            return;
+        }
+        if let (Some(bar), Some((position, message))) = (&self.bar, self.message(p)) {
+            bar.set_position(position);
+            bar.set_message(message);
         }
     }
 
     fn done(&mut self) {
+        if let Some((_, _, started)) = self.phase.take() {
+            self.last_wall = started.elapsed().as_secs_f64();
+        }
         if let Some(bar) = self.bar.take() {
             bar.finish_and_clear();
         }
     }
+
+    fn equilibrated(&mut self, end: PhaseEnd) {
+        self.equilibration = Some((end, self.last_wall));
+    }
 }
 
-fn print_summary(s: &Summary, out: &std::path::Path) {
+/// The equilibration line of a summary: its length, cost and end temperature.
+fn print_equilibration(terminal: Option<&Terminal>, events: u64, what: &str, u: &Names) {
+    match terminal.and_then(|t| t.equilibration) {
+        Some((end, wall)) => line(
+            "equilibration",
+            &format!(
+                "{} {}, {} {what} in {}; ended at T = {} {}",
+                trimmed(end.elapsed, 4),
+                u.time,
+                count(end.events),
+                duration(wall),
+                sig(end.temperature, 4),
+                u.temperature
+            ),
+        ),
+        None if events > 0 => line(
+            "equilibration",
+            &format!("{} {what} (before the checkpoint)", count(events)),
+        ),
+        None => line("equilibration", "none"),
+    }
+}
+
+fn print_summary(s: &Summary, out: &Path, terminal: Option<&Terminal>) {
+    let u = Names::of_summary(&s.units);
     println!(
-        "dmd: {} bodies ({}), density {:.6}, queue {}",
-        s.n_bodies, s.model, s.density, s.queue
+        "dmd: done: {} bodies ({}), ρ = {} {}",
+        count(s.n_bodies),
+        kind(&s.model),
+        sig(s.density, 4),
+        u.density
     );
-    println!(
-        "  events        {} in {:.3} s: {:.4e} events/s, {:.4e} pair events/s",
-        s.events, s.wall_seconds, s.events_per_second, s.pair_events_per_second
+    print_equilibration(terminal, s.equilibration_events, "events", &u);
+    line(
+        "production",
+        &format!(
+            "{} {}, {} events in {} ({} CPU s, {} queue)",
+            trimmed(s.sim_time, 4),
+            u.time,
+            count(s.events),
+            duration(s.wall_seconds),
+            sig(s.cpu_seconds, 3),
+            s.queue
+        ),
+    );
+    line(
+        "speed",
+        &format!(
+            "{} events/s, {} pair events/s, {} pair events per {}",
+            sig(s.events_per_second, 3),
+            sig(s.pair_events_per_second, 3),
+            sig(s.pair_event_rate(), 3),
+            u.time
+        ),
     );
     let kinds: Vec<String> = s
         .events_by_kind
         .iter()
         .filter(|(_, v)| **v > 0)
-        .map(|(k, v)| format!("{k} {v}"))
+        .map(|(k, v)| format!("{k} {}", count(*v)))
         .collect();
-    println!("  by kind       {}", kinds.join(", "));
-    println!(
-        "  sim time      {:.6}   mean free time {:.6e}",
-        s.sim_time, s.mean_free_time
+    list("by kind", &kinds);
+    line(
+        "mean free time",
+        &format!(
+            "{} {} between pair events of a body",
+            sig(s.mean_free_time, 4),
+            u.time
+        ),
     );
-    println!(
-        "  temperature   {:.6}   pressure {:.6} (Z = {:.6})",
-        s.temperature, s.pressure, s.compressibility
-    );
-    println!(
-        "  energy        {:.12e} -> {:.12e} (relative drift {:.2e}), U/N {:.6}",
-        s.energy_total_start,
-        s.energy_total_end,
-        s.relative_energy_drift,
-        s.potential_energy_per_body
-    );
-    println!(
-        "  momentum drift {:.2e}   anomalies {}",
-        s.momentum_drift, s.anomalies
-    );
-    print_estimates(s);
-    if let Some(d) = s.diffusion_msd {
-        println!("  diffusion (MSD) {d:.6}");
+    let mut temperature = vec![format!(
+        "{} {} (production started at {} {})",
+        pm(s.temperature, s.temperature_error, 5),
+        u.temperature,
+        sig(s.temperature_start, 5),
+        u.temperature
+    )];
+    if let Some(rot) = s.rotational_temperature {
+        temperature.push(format!(
+            "translational {} {}",
+            sig(s.translational_temperature, 5),
+            u.temperature
+        ));
+        temperature.push(format!("rotational {} {}", sig(rot, 5), u.temperature));
     }
-    if let Some(d) = s.diffusion_vacf {
-        println!("  diffusion (VACF) {d:.6}");
+    list("temperature", &temperature);
+    line(
+        "pressure",
+        &format!(
+            "{} {}, Z = PV/NkT = {}",
+            pm(s.pressure, s.pressure_error, 5),
+            u.pressure,
+            sig(s.compressibility, 4)
+        ),
+    );
+    line(
+        "U/N",
+        &format!(
+            "{} {}{}",
+            pm(
+                s.potential_energy_per_body,
+                s.potential_energy_per_body_error,
+                5
+            ),
+            u.energy,
+            if s.model.starts_with("terraced") {
+                " (the terraced potential)"
+            } else {
+                ""
+            }
+        ),
+    );
+    if let (Some(e), Some(p)) = (s.potential_energy_per_body_smooth, s.pressure_smooth) {
+        line(
+            "smooth model",
+            &format!(
+                "U/N {} {}, P {} {} (continuous potential)",
+                pm(e, s.potential_energy_per_body_smooth_error, 5),
+                u.energy,
+                pm(p, s.pressure_smooth_error, 5),
+                u.pressure
+            ),
+        );
     }
+    line(
+        "energy",
+        &format!(
+            "{} → {} {} (total), relative drift {:.1e}",
+            sig(s.energy_total_start, 10),
+            sig(s.energy_total_end, 10),
+            u.energy,
+            s.relative_energy_drift
+        ),
+    );
+    let mut checks = vec![
+        format!("momentum drift {:.1e}", s.momentum_drift),
+        format!("anomalies {}", count(s.anomalies)),
+    ];
+    if s.search.is_some() {
+        checks.push(format!(
+            "missed events detected {}",
+            count(s.detected_misses)
+        ));
+    }
+    if let Some(m) = s.verified_misses {
+        checks.push(format!("found by the verification grid {}", count(m)));
+    }
+    if let Some(b) = s.bond_error {
+        checks.push(format!("largest relative bond error {b:.1e}"));
+    }
+    list("checks", &checks);
+    print_diffusion(s.diffusion_msd, s.diffusion_vacf, &u);
     if let Some(h) = &s.hmc {
-        println!(
-            "  hmc           {} τ = {}, {} segments, acceptance {:.4} (rejected: overlap {}, energy {}, non-finite {}), segments with a miss {}",
-            h.ensemble,
-            h.segment_time,
-            h.segments,
-            h.acceptance_rate,
-            h.rejected_by_cause.get("overlap").copied().unwrap_or(0),
-            h.rejected_by_cause.get("energy").copied().unwrap_or(0),
-            h.rejected_by_cause.get("non_finite").copied().unwrap_or(0),
-            h.segments_with_misses
+        line(
+            "hmc",
+            &format!(
+                "{} chain, segments of {} {}: {} segments, acceptance {}",
+                h.ensemble,
+                plain(h.segment_time),
+                u.time,
+                count(h.segments),
+                sig(h.acceptance_rate, 4)
+            ),
         );
-        println!(
-            "  chain U/N     {:.6} ± {:.6} (block averages), <exp(-βΔH)> {:.6}",
-            h.potential_energy_per_body.mean,
-            h.potential_energy_per_body.error,
-            h.exp_minus_beta_delta_h
+        let rejected = |k: &str| h.rejected_by_cause.get(k).copied().unwrap_or(0);
+        line(
+            "",
+            &format!(
+                "rejected: overlap {}, energy {}, non-finite {}; segments with a miss {}",
+                count(rejected("overlap")),
+                count(rejected("energy")),
+                count(rejected("non_finite")),
+                count(h.segments_with_misses)
+            ),
+        );
+        line(
+            "chain U/N",
+            &format!(
+                "{} {} (block averages), <exp(-βΔH)> = {}",
+                pm(
+                    h.potential_energy_per_body.mean,
+                    Some(h.potential_energy_per_body.error),
+                    5
+                ),
+                u.energy,
+                sig(h.exp_minus_beta_delta_h, 6)
+            ),
         );
     }
+    print_wrote(out, &s.files);
+}
+
+/// The diffusion coefficients a run measured.
+fn print_diffusion(msd: Option<f64>, vacf: Option<f64>, u: &Names) {
+    let mut d = Vec::new();
+    if let Some(x) = msd {
+        d.push(format!("{} {} (MSD)", sig(x, 4), u.diffusion));
+    }
+    if let Some(x) = vacf {
+        d.push(format!("{} {} (VACF)", sig(x, 4), u.diffusion));
+    }
+    if !d.is_empty() {
+        list("diffusion", &d);
+    }
+}
+
+/// The files written.
+fn print_wrote(out: &Path, files: &[String]) {
+    let mut items = vec![format!("{}/summary.json", out.display())];
+    items.extend(files.iter().cloned());
+    list("wrote", &items);
+}
+
+fn print_smd_summary(s: &SmdSummary, out: &Path, terminal: Option<&Terminal>) {
+    let u = Names::of_summary(&s.units);
     println!(
-        "  wrote {}/summary.json{}",
-        out.display(),
-        if s.files.is_empty() {
-            String::new()
-        } else {
-            format!(" and {}", s.files.join(", "))
-        }
+        "dmd: done (engine smd, standard MD): {} bodies ({}), ρ = {} {}",
+        count(s.n_bodies),
+        kind(&s.model),
+        sig(s.density, 4),
+        u.density
     );
+    print_equilibration(terminal, s.equilibration_steps, "steps", &u);
+    line(
+        "production",
+        &format!(
+            "{} {}, {} steps of dt = {} {} in {} CPU s: {} ns per body-step",
+            trimmed(s.sim_time, 4),
+            u.time,
+            count(s.steps),
+            plain(s.dt),
+            u.time,
+            sig(s.cpu_seconds, 3),
+            sig(s.ns_per_particle_step, 3)
+        ),
+    );
+    list(
+        "neighbours",
+        &[
+            format!(
+                "{} list builds ({} steps each)",
+                count(s.neighbour_list_builds),
+                sig(s.steps_per_build, 3)
+            ),
+            format!("skin {} {}", sig(s.skin, 4), u.length),
+            format!(
+                "smoothing {} to {} {}",
+                sig(s.smoothing[0], 4),
+                sig(s.smoothing[1], 4),
+                u.length
+            ),
+        ],
+    );
+    let mut temperature = vec![format!(
+        "{} {} (production started at {} {})",
+        pm(s.temperature, Some(s.temperature_error), 5),
+        u.temperature,
+        sig(s.temperature_start, 5),
+        u.temperature
+    )];
+    if let Some(rot) = s.rotational_temperature {
+        temperature.push(format!(
+            "translational {} {}",
+            sig(s.translational_temperature, 5),
+            u.temperature
+        ));
+        temperature.push(format!("rotational {} {}", sig(rot, 5), u.temperature));
+    }
+    list("temperature", &temperature);
+    line(
+        "pressure",
+        &format!(
+            "{} {}, Z = PV/NkT = {} (the smooth model)",
+            pm(s.pressure, Some(s.pressure_error), 5),
+            u.pressure,
+            sig(s.compressibility, 4)
+        ),
+    );
+    line(
+        "U/N",
+        &format!(
+            "{} {} (the smooth model)",
+            pm(
+                s.potential_energy_per_body,
+                Some(s.potential_energy_per_body_error),
+                5
+            ),
+            u.energy
+        ),
+    );
+    line(
+        "energy",
+        &format!(
+            "{} → {} {} (total), relative drift {:.1e}",
+            sig(s.energy_total_start, 10),
+            sig(s.energy_total_end, 10),
+            u.energy,
+            s.relative_energy_drift
+        ),
+    );
+    list(
+        "",
+        &[
+            format!(
+                "drift {:.2e} {} per body per {}",
+                s.energy_drift_per_body, u.energy, u.time
+            ),
+            format!("std {:.2e} {}", s.energy_total_std, u.energy),
+            format!(
+                "{} % of std U",
+                sig(100.0 * s.energy_fluctuation_over_potential_std, 3)
+            ),
+        ],
+    );
+    print_diffusion(s.diffusion_msd, s.diffusion_vacf, &u);
+    if !s.ignored_keys.is_empty() {
+        let mut keys = vec![format!(
+            "ignored (event-driven only): {}",
+            s.ignored_keys[0]
+        )];
+        keys.extend(s.ignored_keys[1..].iter().cloned());
+        wrap("  ", 4, &keys);
+    }
+    for n in &s.notes {
+        let words: Vec<&str> = n.split(' ').collect();
+        let mut current = "  note:".to_owned();
+        for w in words {
+            if current.chars().count() + 1 + w.chars().count() > COLUMNS {
+                println!("{current}");
+                current = "       ".to_owned();
+            }
+            current.push(' ');
+            current.push_str(w);
+        }
+        println!("{current}");
+    }
+    print_wrote(out, &s.files);
 }
 
 fn main() -> ExitCode {
@@ -314,12 +925,6 @@ fn main() -> ExitCode {
             if s.engine == Engine::Smd {
                 return run_smd(&scene, &s, &base, &out, quiet);
             }
-            if s.smd.is_some() && !quiet {
-                println!(
-                    "dmd: note: the event-driven engine uses only [smd] smoothing (for the smooth \
-                     estimators)"
-                );
-            }
             let source = SceneSource {
                 text: std::fs::read_to_string(&scene).unwrap_or_default(),
                 overrides: set,
@@ -338,17 +943,14 @@ fn main() -> ExitCode {
             if let Err(code) = install_signal_handlers() {
                 return code;
             }
-            let mut bar = Bar {
-                bar: None,
-                length: None,
-            };
+            let mut terminal = Terminal::new(&scene, &out);
             let result = if quiet {
                 run_scene_with(&s, &base, Some(&out), &mut dmd_sim::run::Quiet, &options)
             } else {
-                run_scene_with(&s, &base, Some(&out), &mut bar, &options)
+                run_scene_with(&s, &base, Some(&out), &mut terminal, &options)
             };
             match result {
-                Ok(summary) => finished(&summary, &out, quiet),
+                Ok(summary) => finished(&summary, &out, (!quiet).then_some(&terminal)),
                 Err(e) => {
                     eprintln!("dmd: {}: {e}", scene.display());
                     exit_code(&e)
@@ -372,26 +974,17 @@ fn main() -> ExitCode {
 }
 
 /// `dmd run` of a scene with `engine = "smd"`.
-fn run_smd(
-    scene: &std::path::Path,
-    s: &Scene,
-    base: &std::path::Path,
-    out: &std::path::Path,
-    quiet: bool,
-) -> ExitCode {
-    let mut bar = Bar {
-        bar: None,
-        length: None,
-    };
+fn run_smd(scene: &Path, s: &Scene, base: &Path, out: &Path, quiet: bool) -> ExitCode {
+    let mut terminal = Terminal::new(scene, out);
     let result = if quiet {
         smd_engine::run_with(s, base, Some(out), &mut dmd_sim::run::Quiet)
     } else {
-        smd_engine::run_with(s, base, Some(out), &mut bar)
+        smd_engine::run_with(s, base, Some(out), &mut terminal)
     };
     match result {
         Ok(summary) => {
             if !quiet {
-                print_smd_summary(&summary, out);
+                print_smd_summary(&summary, out, Some(&terminal));
             }
             ExitCode::SUCCESS
         }
@@ -404,93 +997,6 @@ fn run_smd(
             ExitCode::FAILURE
         }
     }
-}
-
-/// Production temperature and the smooth estimators with error bars and units (lines printed
-/// only for what the run measured).
-fn print_estimates(s: &Summary) {
-    let [_, _, e, t, p] = dmd_sim::run::unit_names(&s.units);
-    let pm = |x: Option<f64>| x.map_or(String::new(), |x| format!(" ± {x:.3}"));
-    println!(
-        "  production    T {:.3}{} {t} (started at {:.6} {t}), U/N {:.4}{} {e}, P {:.3}{} {p}",
-        s.temperature,
-        pm(s.temperature_error),
-        s.temperature_start,
-        s.potential_energy_per_body,
-        pm(s.potential_energy_per_body_error),
-        s.pressure,
-        pm(s.pressure_error)
-    );
-    if let (Some(u), Some(pr)) = (s.potential_energy_per_body_smooth, s.pressure_smooth) {
-        println!(
-            "  smooth model  U/N {u:.4}{} {e}, P {pr:.3}{} {p} (the continuous potential at the samples)",
-            pm(s.potential_energy_per_body_smooth_error),
-            pm(s.pressure_smooth_error)
-        );
-    }
-}
-
-fn print_smd_summary(s: &SmdSummary, out: &std::path::Path) {
-    println!(
-        "dmd (engine smd): {} bodies ({}), density {:.6}",
-        s.n_bodies, s.model, s.density
-    );
-    println!(
-        "  steps         {} of dt = {:.6e} ({} equilibration) in {:.3} s: {:.1} ns per particle-step",
-        s.steps, s.dt, s.equilibration_steps, s.cpu_seconds, s.ns_per_particle_step
-    );
-    println!(
-        "  sim time      {:.6}   neighbour lists {} ({:.1} steps each, skin {:.4}), smoothing {:?}",
-        s.sim_time, s.neighbour_list_builds, s.steps_per_build, s.skin, s.smoothing
-    );
-    println!(
-        "  temperature   {:.6} ± {:.6}   pressure {:.6} ± {:.6} (Z = {:.6})",
-        s.temperature, s.temperature_error, s.pressure, s.pressure_error, s.compressibility
-    );
-    let [_, _, e, t, p] = dmd_sim::run::unit_names(&s.units);
-    println!(
-        "  production    started at T {:.6} {t}; U/N {:.4} ± {:.4} {e}, P {:.3} ± {:.3} {p} (the smooth model)",
-        s.temperature_start,
-        s.potential_energy_per_body_smooth,
-        s.potential_energy_per_body_smooth_error,
-        s.pressure_smooth,
-        s.pressure_smooth_error
-    );
-    println!(
-        "  energy        {:.12e} -> {:.12e} (relative drift {:.2e}), U/N {:.6}",
-        s.energy_total_start,
-        s.energy_total_end,
-        s.relative_energy_drift,
-        s.potential_energy_per_body
-    );
-    println!(
-        "  energy drift  {:.3e} per body per unit time, std {:.3e} ({:.3} of std U)",
-        s.energy_drift_per_body, s.energy_total_std, s.energy_fluctuation_over_potential_std
-    );
-    if let Some(d) = s.diffusion_msd {
-        println!("  diffusion (MSD) {d:.6}");
-    }
-    if let Some(d) = s.diffusion_vacf {
-        println!("  diffusion (VACF) {d:.6}");
-    }
-    if !s.ignored_keys.is_empty() {
-        println!(
-            "  ignored (event-driven only): {}",
-            s.ignored_keys.join(", ")
-        );
-    }
-    for n in &s.notes {
-        println!("  note: {n}");
-    }
-    println!(
-        "  wrote {}/summary.json{}",
-        out.display(),
-        if s.files.is_empty() {
-            String::new()
-        } else {
-            format!(" and {}", s.files.join(", "))
-        }
-    );
 }
 
 /// `dmd resume`: every check of the checkpoint passes before anything is written.
@@ -522,7 +1028,7 @@ fn resume(path: PathBuf, out: Option<PathBuf>, quiet: bool, every: Option<String
     };
     let out = out.unwrap_or_else(|| {
         path.parent()
-            .map(std::path::Path::to_owned)
+            .map(Path::to_owned)
             .filter(|p| !p.as_os_str().is_empty())
             .unwrap_or_else(|| PathBuf::from("."))
     });
@@ -540,10 +1046,7 @@ fn resume(path: PathBuf, out: Option<PathBuf>, quiet: bool, every: Option<String
     if let Err(code) = install_signal_handlers() {
         return code;
     }
-    let mut bar = Bar {
-        bar: None,
-        length: None,
-    };
+    let mut terminal = Terminal::new(&path, &out);
     let result = if quiet {
         run_scene_with(
             &scene,
@@ -553,10 +1056,10 @@ fn resume(path: PathBuf, out: Option<PathBuf>, quiet: bool, every: Option<String
             &options,
         )
     } else {
-        run_scene_with(&scene, &base, Some(&out), &mut bar, &options)
+        run_scene_with(&scene, &base, Some(&out), &mut terminal, &options)
     };
     match result {
-        Ok(summary) => finished(&summary, &out, quiet),
+        Ok(summary) => finished(&summary, &out, (!quiet).then_some(&terminal)),
         Err(e @ dmd_sim::run::RunError::Checkpoint(_)) => {
             eprintln!("dmd: {e}");
             ExitCode::from(2)
@@ -595,11 +1098,12 @@ fn exit_code(e: &dmd_sim::run::RunError) -> ExitCode {
     }
 }
 
-/// The end of a run that completed: the summary on the terminal, and exit status 1 if the
-/// state became non-finite (its outputs are written, for the post-mortem), 0 otherwise.
-fn finished(s: &Summary, out: &std::path::Path, quiet: bool) -> ExitCode {
-    if !quiet {
-        print_summary(s, out);
+/// The end of a run that completed: the summary on the terminal (unless quiet, `terminal`
+/// `None`), and exit status 1 if the state became non-finite (its outputs are written, for the
+/// post-mortem), 0 otherwise.
+fn finished(s: &Summary, out: &Path, terminal: Option<&Terminal>) -> ExitCode {
+    if let Some(t) = terminal {
+        print_summary(s, out, Some(t));
     }
     let energies = [
         ("energy_kinetic", s.energy_kinetic),
@@ -631,7 +1135,7 @@ fn finished(s: &Summary, out: &std::path::Path, quiet: bool) -> ExitCode {
 }
 
 /// `dmd resume DIR` of chains or a sweep.
-fn resume_ensemble(dir: &std::path::Path, threads: Option<usize>, quiet: bool) -> ExitCode {
+fn resume_ensemble(dir: &Path, threads: Option<usize>, quiet: bool) -> ExitCode {
     let done = |k: usize, n: usize| {
         if !quiet {
             eprintln!("dmd: {k} of {n} jobs done");
@@ -658,14 +1162,40 @@ fn resume_ensemble(dir: &std::path::Path, threads: Option<usize>, quiet: bool) -
 /// `dmd run` of a scene with `[chains]` or `[sweep]`: the jobs in parallel, then the
 /// aggregate.
 fn run_ensemble(
-    scene: &std::path::Path,
+    scene: &Path,
     s: &Scene,
     source: SceneSource,
-    out: &std::path::Path,
+    out: &Path,
     every: Option<Every>,
     threads: Option<usize>,
     quiet: bool,
 ) -> ExitCode {
+    if !quiet {
+        let chains = s.chains.as_ref().map_or(1, |c| c.count);
+        let points = s.sweep.as_ref().map_or(1, |w| w.values.len() as u64);
+        println!(
+            "dmd: running {}, output in {}",
+            scene.display(),
+            out.display()
+        );
+        let sweep = s
+            .sweep
+            .as_ref()
+            .map(|w| format!(", sweeping {} over {} values", w.key, w.values.len()))
+            .unwrap_or_default();
+        wrap(
+            "  ",
+            2,
+            &[
+                format!(
+                    "{} jobs ({points} point(s) × {chains} chain(s)) of {} bodies{sweep}",
+                    points * chains,
+                    count(s.n_bodies())
+                ),
+                "run in parallel, each into its own folder".to_owned(),
+            ],
+        );
+    }
     let done = |k: usize, n: usize| {
         if !quiet {
             eprintln!("dmd: {k} of {n} jobs done");
@@ -689,7 +1219,17 @@ fn run_ensemble(
     }
 }
 
-fn print_ensemble(e: &dmd_sim::chains::Ensemble, out: &std::path::Path) {
+fn print_ensemble(e: &dmd_sim::chains::Ensemble, out: &Path) {
+    // The units of the jobs, from the first job's summary.
+    let units = e
+        .jobs
+        .first()
+        .and_then(|j| std::fs::read_to_string(out.join(j).join("summary.json")).ok())
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+        .and_then(|v| v["units"].as_str().map(str::to_owned))
+        .unwrap_or_default();
+    let u = Names::of_summary(&units);
+    let rate = format!("per {}", u.time);
     println!(
         "dmd: {} point(s) × {} chain(s){}",
         e.points.len(),
@@ -704,10 +1244,19 @@ fn print_ensemble(e: &dmd_sim::chains::Ensemble, out: &std::path::Path) {
             println!("  {} = {v}", e.key.as_deref().unwrap_or("value"));
         }
         for (name, q) in &p.quantities {
-            match q.error {
-                Some(err) => println!("    {name:<36} {:.6} ± {err:.6}", q.mean),
-                None => println!("    {name:<36} {:.6}", q.mean),
-            }
+            let unit = match name.as_str() {
+                "temperature" => u.temperature,
+                "pressure" => u.pressure,
+                "potential_energy_per_body"
+                | "hmc.potential_energy_per_body.mean"
+                | "hmc.kinetic_energy_per_body.mean" => u.energy,
+                "mean_free_time" => u.time,
+                "collision_rate" => rate.as_str(),
+                "diffusion_msd" | "diffusion_vacf" => u.diffusion,
+                _ => "",
+            };
+            let line = format!("    {name:<36} {} {unit}", pm(q.mean, q.error, 6));
+            println!("{}", line.trim_end());
         }
     }
     println!(

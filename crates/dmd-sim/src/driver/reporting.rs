@@ -5,7 +5,7 @@ use std::path::Path;
 
 use crate::analysis::observable::Observers;
 use crate::analysis::output::{Curve, OutputError, plot_svg, write_csv};
-use crate::config::scene::SceneError;
+use crate::config::scene::{SceneError, UnitSystem};
 use crate::config::units::Units;
 use crate::driver::checkpoint::CheckpointError;
 use crate::engine::simulation::{Progress, SimError, Stop};
@@ -51,14 +51,62 @@ pub enum RunError {
     },
 }
 
-/// Receives progress reports (the `dmd` command draws a progress bar).
+/// What a run is about to do, told to its [`Reporter`] once it is set up and before any
+/// simulated time passes. Numbers are in the scene's units.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RunPlan {
+    /// `dmd` (event-driven) or `smd` (standard MD).
+    pub engine: &'static str,
+    /// The interaction model, as the summary's `model`.
+    pub model: String,
+    /// Bodies per species: name and count.
+    pub species: Vec<(String, u64)>,
+    /// Number of bodies.
+    pub n_bodies: u64,
+    /// Number density N/V.
+    pub density: f64,
+    /// Box edge lengths.
+    pub box_lengths: [f64; 3],
+    /// The temperature of the initial velocities.
+    pub temperature: f64,
+    /// The thermostat's temperature and the phases it acts in (`equilibration` or
+    /// `always`), if the scene has one.
+    pub thermostat: Option<(f64, &'static str)>,
+    /// The unit system.
+    pub units: UnitSystem,
+    /// The phases in order, named as [`Reporter::phase`] names them (`equilibration`,
+    /// `hmc equilibration`, `production`, `hmc production`), with their lengths (HMC phases
+    /// count segments in `Stop::Events`).
+    pub phases: Vec<(&'static str, Stop)>,
+    /// The time step of the standard-MD engine.
+    pub dt: Option<f64>,
+    /// The run continues from a checkpoint, in this phase.
+    pub resumed_in: Option<&'static str>,
+}
+
+/// How a phase ended: its length and the state it left.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PhaseEnd {
+    /// Events of the phase (steps for the standard-MD engine).
+    pub events: u64,
+    /// Simulated time of the phase.
+    pub elapsed: f64,
+    /// The kinetic temperature at its end, in the scene's unit.
+    pub temperature: f64,
+}
+
+/// Receives progress reports (the `dmd` command prints what runs and draws a progress bar).
 pub trait Reporter {
+    /// The run is set up and about to start.
+    fn start(&mut self, _plan: &RunPlan) {}
     /// A phase (`equilibration` or `production`) starts with this length.
     fn phase(&mut self, _name: &str, _length: Stop) {}
     /// Progress within the phase.
     fn progress(&mut self, _p: Progress) {}
     /// The phase ended.
     fn done(&mut self) {}
+    /// The equilibration phase ended in this state (reported after [`Reporter::done`]).
+    fn equilibrated(&mut self, _end: PhaseEnd) {}
 }
 
 /// A reporter that reports nothing.

@@ -33,7 +33,9 @@ use crate::driver::checkpoint::{
 };
 use crate::driver::hmc::{Acceptance, Chain, Ensemble, HmcSettings, HmcSummary};
 use crate::driver::reporting::write_observables;
-pub use crate::driver::reporting::{Quiet, Reporter, RunError, thread_cpu_seconds, unit_names};
+pub use crate::driver::reporting::{
+    PhaseEnd, Quiet, Reporter, RunError, RunPlan, thread_cpu_seconds, unit_names,
+};
 use crate::engine::model::{HardSpheres, PairModel, Stepped};
 use crate::engine::schedule::Scheduler;
 use crate::engine::simulation::MAX_REBASE_EVENTS;
@@ -150,9 +152,13 @@ pub struct Summary {
     pub model: String,
     /// The unit system of the numbers (`reduced` or `molecular`).
     pub units: String,
-    /// Pair events (terrace crossings and reflections) per unit of simulated time: per ps in
-    /// molecular units (003 §V.B reports 4.7·10⁴ for its rods at ΔV = kT/2).
-    pub events_per_ps: f64,
+    /// Pair events (terrace crossings and reflections) per ps of simulated time, in molecular
+    /// units only (003 §V.B reports 4.7·10⁴ for its rods at ΔV = kT/2).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub events_per_ps: Option<f64>,
+    /// The same per unit of simulated time, in reduced units only.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub events_per_time_unit: Option<f64>,
     /// Pair events per CPU second.
     pub pair_events_per_cpu_second: f64,
     /// Virtual events (root searches resumed at the end of their window, or started when a
@@ -524,6 +530,57 @@ struct Context<'a> {
 }
 
 impl Context<'_> {
+    /// What the run is about to do, for the reporter.
+    fn plan(&self, andersen: Option<Andersen>, eq: Stop, hmc_eq: u64, production: Stop) -> RunPlan {
+        let scene = self.scene;
+        let u = &self.units;
+        let l = self.config.lengths;
+        let n = self.config.positions.len() as u64;
+        let mut phases = Vec::new();
+        if !matches!(eq, Stop::Events(0) | Stop::Time(0.0)) {
+            phases.push(("equilibration", eq));
+        }
+        if hmc_eq > 0 {
+            phases.push(("hmc equilibration", Stop::Events(hmc_eq)));
+        }
+        phases.push(if scene.hmc.is_some() {
+            ("hmc production", production)
+        } else {
+            ("production", production)
+        });
+        RunPlan {
+            engine: "dmd",
+            model: self.model_name.to_owned(),
+            species: scene
+                .species
+                .iter()
+                .map(|s| (s.name.clone(), s.count))
+                .collect(),
+            n_bodies: n,
+            density: n as f64 / (l.x * l.y * l.z),
+            box_lengths: l.to_array(),
+            temperature: u.temperature_out(scene.init.temperature),
+            thermostat: andersen.map(|a| {
+                (
+                    u.temperature_out(a.temperature),
+                    match scene.thermostat.during {
+                        ThermostatPhase::Always => "always",
+                        ThermostatPhase::Equilibration => "equilibration",
+                    },
+                )
+            }),
+            units: scene.units,
+            phases,
+            dt: None,
+            resumed_in: self.options.resume.as_ref().map(|(_, c)| match c.stage {
+                Stage::Equilibration(Left::Segments(_)) => "hmc equilibration",
+                Stage::Equilibration(_) => "equilibration",
+                Stage::Production(_) if scene.hmc.is_some() => "hmc production",
+                Stage::Production(_) => "production",
+            }),
+        }
+    }
+
     fn go_any_queue<M: PairModel>(
         &self,
         model: M,
@@ -608,6 +665,13 @@ impl Context<'_> {
             None if hmc_eq > 0 => Stage::Equilibration(Left::Segments(hmc_eq)),
             None => Stage::Production(Left::Events(0)),
         };
+        let stop = match (scene.run.events, scene.run.time, &scene.hmc) {
+            (_, _, Some(h)) => Stop::Events(h.segments),
+            (Some(e), _, _) => Stop::Events(e),
+            (None, Some(t), _) => Stop::Time(t),
+            (None, None, None) => unreachable!("checked"),
+        };
+        reporter.start(&self.plan(andersen, eq_stop, hmc_eq, stop));
         if resume.is_none() && equilibrate {
             run.record.had_thermostat = andersen.is_some();
             if andersen.is_some() {
@@ -618,6 +682,13 @@ impl Context<'_> {
             reporter.phase("equilibration", eq_stop);
             run.plain(&mut sim, left, false, &mut Observers::default(), reporter)?;
             reporter.done();
+            reporter.equilibrated(PhaseEnd {
+                events: sim.counters().events,
+                elapsed: sim.phase_elapsed(),
+                temperature: self
+                    .units
+                    .temperature_out(2.0 * sim.kinetic_energy() / sim.dof()),
+            });
             run.record.equilibration_events = sim.counters().events;
             stage = if hmc_eq > 0 {
                 Stage::Equilibration(Left::Segments(hmc_eq))
@@ -717,12 +788,6 @@ impl Context<'_> {
                 _ => GsdTrajectory::create(&path, layout)?,
             });
         }
-        let stop = match (scene.run.events, scene.run.time, &scene.hmc) {
-            (_, _, Some(h)) => Stop::Events(h.segments),
-            (Some(e), _, _) => Stop::Events(e),
-            (None, Some(t), _) => Stop::Time(t),
-            (None, None, None) => unreachable!("checked"),
-        };
         if fresh_production {
             let wants_samples = observers.rdf.is_some()
                 || observers.correlations.is_some()
@@ -922,7 +987,10 @@ impl Context<'_> {
                 crate::config::scene::UnitSystem::Molecular => "molecular",
             }
             .to_owned(),
-            events_per_ps: pair_events as f64 / t,
+            events_per_ps: (scene.units == crate::config::scene::UnitSystem::Molecular)
+                .then_some(pair_events as f64 / t),
+            events_per_time_unit: (scene.units == crate::config::scene::UnitSystem::Reduced)
+                .then_some(pair_events as f64 / t),
             pair_events_per_cpu_second: pair_events as f64 / cpu_seconds,
             virtual_events: counters.virtual_,
             terrace_crossings: counters.step_in + counters.step_out,
@@ -972,6 +1040,16 @@ impl Context<'_> {
             write_atomically(&dir.join("summary.json"), json.as_bytes())?;
         }
         Ok(summary)
+    }
+}
+
+impl Summary {
+    /// Pair events per unit of simulated time (`events_per_ps` in molecular units,
+    /// `events_per_time_unit` in reduced ones).
+    pub fn pair_event_rate(&self) -> f64 {
+        self.events_per_ps
+            .or(self.events_per_time_unit)
+            .unwrap_or(f64::NAN)
     }
 }
 

@@ -49,7 +49,7 @@ use crate::config::scene::{
 };
 use crate::config::smd_spec::{check, default_dt, ignored_keys, list_skin, window};
 use crate::config::units::Units;
-use crate::driver::reporting::{Quiet, Reporter, RunError, thread_cpu_seconds};
+use crate::driver::reporting::{PhaseEnd, Quiet, Reporter, RunError, RunPlan, thread_cpu_seconds};
 use crate::engine::body::Body;
 use crate::engine::simulation::{Progress, Sampler, Stop, View};
 use crate::models::rotor::TopInertia;
@@ -447,6 +447,36 @@ impl Job<'_> {
         let t = &scene.thermostat;
         let mut rescale_every = 0;
         let dt = self.settings.dt;
+        let u = self.units;
+        let lengths = self.config.lengths;
+        let mut phases = Vec::new();
+        if self.eq_steps > 0 {
+            phases.push(("equilibration", Stop::Time(self.eq_steps as f64 * dt)));
+        }
+        phases.push(("production", Stop::Time(self.production_steps as f64 * dt)));
+        self.reporter.start(&RunPlan {
+            engine: "smd",
+            model: model.to_owned(),
+            species: scene
+                .species
+                .iter()
+                .map(|s| (s.name.clone(), s.count))
+                .collect(),
+            n_bodies: n as u64,
+            density: n as f64 / (lengths.x * lengths.y * lengths.z),
+            box_lengths: lengths.to_array(),
+            temperature: u.temperature_out(scene.init.temperature),
+            thermostat: (t.kind == ThermostatKind::Andersen && self.eq_steps > 0).then(|| {
+                (
+                    u.temperature_out(t.temperature.unwrap_or(scene.init.temperature)),
+                    "equilibration",
+                )
+            }),
+            units: scene.units,
+            phases,
+            dt: Some(dt),
+            resumed_in: None,
+        });
         if self.eq_steps > 0 {
             let bath = (t.kind == ThermostatKind::Andersen).then(|| {
                 let rate = t.rate.expect("checked: andersen has a rate");
@@ -475,6 +505,11 @@ impl Job<'_> {
                 });
             }
             self.reporter.done();
+            self.reporter.equilibrated(PhaseEnd {
+                events: self.eq_steps,
+                elapsed: self.eq_steps as f64 * dt,
+                temperature: u.temperature_out(md.snapshot().temperature()),
+            });
             if bath.is_some() {
                 self.notes.push(format!(
                     "equilibration: velocity rescaling every {rescale_every} steps (1/rate) in \

@@ -20,5 +20,6 @@ mod sites_scenes;
 mod smd_engine;
 mod smooth;
 mod support;
+mod terminal;
 mod tops;
 mod water_smd;
