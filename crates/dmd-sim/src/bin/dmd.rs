@@ -383,10 +383,17 @@ fn run_smd(
         bar: None,
         length: None,
     };
+    let name = scene.file_stem().map(|s| s.to_string_lossy().into_owned());
     let result = if quiet {
-        smd_engine::run_with(s, base, Some(out), &mut dmd_sim::run::Quiet)
+        smd_engine::run_named(
+            s,
+            base,
+            Some(out),
+            &mut dmd_sim::run::Quiet,
+            name.as_deref(),
+        )
     } else {
-        smd_engine::run_with(s, base, Some(out), &mut bar)
+        smd_engine::run_named(s, base, Some(out), &mut bar, name.as_deref())
     };
     match result {
         Ok(summary) => {
