@@ -135,9 +135,9 @@ impl Rdf {
         &self.members
     }
 
-    /// The partial `g_ab(r)` of every pair of species `a ≤ b` (in the order `(0,0), (0,1), …,
-    /// (1,1), …`): `(a, b, rows (r at bin centre, g_ab(r)))`. Empty for one species.
-    pub fn partials(&self) -> Vec<(usize, usize, Vec<(f64, f64)>)> {
+    /// The partial `g_ab(r)` of every pair of species `a ≤ b`, in the order `(0,0), (0,1), …,
+    /// (1,1), …`. Empty for one species.
+    pub fn partials(&self) -> Vec<PartialRdf> {
         let kinds = self.members.len();
         if self.partial.is_empty() {
             return Vec::new();
@@ -159,11 +159,22 @@ impl Rdf {
                         (r, ratio(self.partial[p * bins + k], pairs * shell))
                     })
                     .collect();
-                out.push((a, b, rows));
+                out.push(PartialRdf { a, b, rows });
             }
         }
         out
     }
+}
+
+/// The partial radial distribution function of one pair of species ([`Rdf::partials`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PartialRdf {
+    /// The first species (index in the scene's order).
+    pub a: usize,
+    /// The second species, `b ≥ a`.
+    pub b: usize,
+    /// Rows `(r at bin centre, g_ab(r))`.
+    pub rows: Vec<(f64, f64)>,
 }
 
 /// `count / ideal`, 0 where the ideal count is 0 (a species of one body, an empty shell).
@@ -576,7 +587,7 @@ mod tests {
         let n = 300.0f64;
         for (k, &(r, g)) in total.iter().enumerate() {
             let mut sum = 0.0;
-            for (a, b, rows) in &partials {
+            for PartialRdf { a, b, rows } in &partials {
                 let (na, nb) = (rdf.members()[*a] as f64, rdf.members()[*b] as f64);
                 let pairs = if a == b {
                     na * (na - 1.0)

@@ -115,9 +115,9 @@ pub struct Mean {
     pub error: Option<f64>,
 }
 
-/// One curve of a plot.
+/// One curve of a [`Plot`].
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct Curve {
+pub struct Line {
     /// Legend.
     pub label: String,
     /// Points.
@@ -128,10 +128,10 @@ pub struct Curve {
     pub mean: Option<Mean>,
 }
 
-impl Curve {
-    /// A solid curve without a mean.
+impl Line {
+    /// A solid line without a mean.
     pub fn new(label: impl Into<String>, points: Vec<(f64, f64)>) -> Self {
-        Curve {
+        Line {
             label: label.into(),
             points,
             dashed: false,
@@ -153,12 +153,12 @@ pub struct Plot {
     /// The y axis with its unit (`P (bar)`).
     pub y_label: String,
     /// The curves; a legend lists those with a label, and the means.
-    pub curves: Vec<Curve>,
+    pub lines: Vec<Line>,
 }
 
 /// The range `(x0, x1, y0, y1)` of the finite points and mean bands of `curves`, padded in y;
 /// none without a finite point.
-fn plot_range(curves: &[Curve]) -> Option<(f64, f64, f64, f64)> {
+fn plot_range(curves: &[Line]) -> Option<(f64, f64, f64, f64)> {
     let finite = |p: &&(f64, f64)| p.0.is_finite() && p.1.is_finite();
     let mut any = false;
     let (mut x0, mut x1, mut y0, mut y1) = (
@@ -193,7 +193,7 @@ fn plot_range(curves: &[Curve]) -> Option<(f64, f64, f64, f64)> {
 /// (sampled along their segments), the upper right first among equals. Returns the place as
 /// `(column, row)`, each 0, 1 or 2 (left/top, middle, right/bottom), and the points it covers.
 fn legend_place(
-    curves: &[Curve],
+    curves: &[Line],
     (x0, x1, y0, y1): (f64, f64, f64, f64),
     w: f64,
     h: f64,
@@ -298,16 +298,16 @@ fn tick_label(lo: f64, hi: f64) -> impl Fn(&f64) -> String {
 ///
 /// # Errors
 /// [`OutputError`].
-pub fn plot_svg(path: &Path, plot: &Plot) -> Result<(), OutputError> {
+pub fn write_plot(path: &Path, plot: &Plot) -> Result<(), OutputError> {
     use plotters::prelude::*;
     let tmp = temporary(path);
     let finite = |p: &&(f64, f64)| p.0.is_finite() && p.1.is_finite();
-    let Some((x0, x1, y0, mut y1)) = plot_range(&plot.curves) else {
+    let Some((x0, x1, y0, mut y1)) = plot_range(&plot.lines) else {
         return Ok(());
     };
     // One legend entry per labelled curve; a curve with a mean has one entry for both, drawn
     // as the mean's line on its band.
-    let entry = |c: &Curve| -> Option<String> {
+    let entry = |c: &Line| -> Option<String> {
         match (&c.mean, c.label.is_empty()) {
             (Some(m), false) => Some(format!("{}: {}", c.label, m.label)),
             (Some(m), true) => Some(m.label.clone()),
@@ -315,14 +315,14 @@ pub fn plot_svg(path: &Path, plot: &Plot) -> Result<(), OutputError> {
             (None, true) => None,
         }
     };
-    let entries: Vec<String> = plot.curves.iter().filter_map(entry).collect();
+    let entries: Vec<String> = plot.lines.iter().filter_map(entry).collect();
     // The legend's box as a fraction of the plotting area (about 7 pixels a character, 19 a
     // line, in a plotting area of about 650 × 350 pixels). Where every place would cover a
     // curve, the y axis is lengthened to leave the top free for it.
     let chars = entries.iter().map(|l| l.chars().count()).max().unwrap_or(0);
     let w = (40.0 + 7.0 * chars as f64) / 650.0;
     let h = (12.0 + 19.0 * entries.len() as f64) / 350.0;
-    let (mut place, covered) = legend_place(&plot.curves, (x0, x1, y0, y1), w, h);
+    let (mut place, covered) = legend_place(&plot.lines, (x0, x1, y0, y1), w, h);
     if covered > 0 && h < 0.6 {
         y1 = y0 + (y1 - y0) / (1.0 - h - 0.03);
         place = (2, 0);
@@ -356,7 +356,7 @@ pub fn plot_svg(path: &Path, plot: &Plot) -> Result<(), OutputError> {
             MAGENTA,
             RGBColor(0, 140, 160),
         ];
-        for (k, c) in plot.curves.iter().enumerate() {
+        for (k, c) in plot.lines.iter().enumerate() {
             let color = colors[k % colors.len()];
             let mean = c.mean.as_ref().filter(|m| m.value.is_finite());
             // A curve with a mean is drawn lighter and thinner, its mean and band over it.
@@ -428,6 +428,42 @@ pub fn plot_svg(path: &Path, plot: &Plot) -> Result<(), OutputError> {
     };
     draw().map_err(|e| io_err(&tmp, e))?;
     std::fs::rename(&tmp, path).map_err(|e| io_err(path, e))
+}
+
+/// One curve of a plot drawn by [`plot_svg`].
+pub struct Curve<'a> {
+    /// Legend.
+    pub label: &'a str,
+    /// Points.
+    pub points: Vec<(f64, f64)>,
+}
+
+/// Draws curves into an SVG file (written atomically) with [`write_plot`]: a title, axis
+/// labels and, for more than one curve, a legend.
+///
+/// # Errors
+/// [`OutputError`].
+pub fn plot_svg(
+    path: &Path,
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    curves: &[Curve<'_>],
+) -> Result<(), OutputError> {
+    let legend = curves.len() > 1;
+    write_plot(
+        path,
+        &Plot {
+            title: title.to_owned(),
+            caption: String::new(),
+            x_label: x_label.to_owned(),
+            y_label: y_label.to_owned(),
+            lines: curves
+                .iter()
+                .map(|c| Line::new(if legend { c.label } else { "" }, c.points.clone()))
+                .collect(),
+        },
+    )
 }
 
 /// How a trajectory frame draws the bodies of one species.

@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use crate::analysis::observable::Observers;
-use crate::analysis::output::{Curve, Mean, OutputError, Plot, plot_svg, write_csv};
+use crate::analysis::output::{Line, Mean, OutputError, Plot, write_csv, write_plot};
 use crate::config::scene::SceneError;
 use crate::config::units::Units;
 use crate::driver::checkpoint::CheckpointError;
@@ -260,12 +260,12 @@ pub(crate) fn write_observables(
     let mut files = Vec::new();
     let au = axis_units(units);
     let caption = info.caption(&au);
-    let plot = |title: &str, x: String, y: String, curves: Vec<Curve>| Plot {
+    let plot = |title: &str, x: String, y: String, curves: Vec<Line>| Plot {
         title: title.to_owned(),
         caption: caption.clone(),
         x_label: x,
         y_label: y,
-        curves,
+        lines: curves,
     };
     let mut table = |name: &str,
                      header: &[String],
@@ -278,7 +278,7 @@ pub(crate) fn write_observables(
         files.push(csv);
         if let (true, Some(p)) = (plots, plot) {
             let svg = format!("{name}.svg");
-            plot_svg(&dir.join(&svg), &p)?;
+            write_plot(&dir.join(&svg), &p)?;
             if dir.join(&svg).exists() {
                 files.push(svg);
             }
@@ -297,7 +297,7 @@ pub(crate) fn write_observables(
         };
         let mut header = strings(&["r", "g"]);
         let mut rows: Vec<Vec<f64>> = t.iter().map(|&(r, g)| vec![r, g]).collect();
-        let mut curves = vec![Curve::new(
+        let mut curves = vec![Line::new(
             if partials.is_empty() {
                 String::new()
             } else {
@@ -305,12 +305,12 @@ pub(crate) fn write_observables(
             },
             t,
         )];
-        for (a, b, p) in partials {
-            header.push(format!("g_{}_{}", name(a), name(b)));
-            for (row, &(_, g)) in rows.iter_mut().zip(&p) {
+        for p in partials {
+            header.push(format!("g_{}_{}", name(p.a), name(p.b)));
+            for (row, &(_, g)) in rows.iter_mut().zip(&p.rows) {
                 row.push(g);
             }
-            curves.push(Curve::new(format!("g {}–{}", name(a), name(b)), p));
+            curves.push(Line::new(format!("g {}–{}", name(p.a), name(p.b)), p.rows));
         }
         table(
             "rdf",
@@ -327,11 +327,11 @@ pub(crate) fn write_observables(
     if let Some(c) = &obs.correlations {
         if c.wants_msd() {
             let t = c.msd_table();
-            let mut curves = vec![Curve::new("⟨|r(t) − r(0)|²⟩", t.clone())];
+            let mut curves = vec![Line::new("⟨|r(t) − r(0)|²⟩", t.clone())];
             if let Some((a, b)) = msd_fit(&t) {
                 let from = t[t.len() / 2].0;
                 let to = t.last().map_or(from, |p| p.0);
-                curves.push(Curve {
+                curves.push(Line {
                     label: format!("fit 6Dt + c: D = {} {}", sig(b / 6.0), au.diffusion),
                     points: vec![(from, a + b * from), (to, a + b * to)],
                     dashed: true,
@@ -361,7 +361,7 @@ pub(crate) fn write_observables(
                     "Velocity autocorrelation (normalised)",
                     format!("t ({})", au.time),
                     "⟨v(0)·v(t)⟩ / ⟨v²⟩ (dimensionless)".to_owned(),
-                    vec![Curve::new(
+                    vec![Line::new(
                         match c.diffusion_from_vacf() {
                             Some(d) => format!(
                                 "⟨v²⟩ = {} {}, Green–Kubo D = {} {}",
@@ -388,8 +388,8 @@ pub(crate) fn write_observables(
                     format!("t ({})", au.time),
                     "correlation (dimensionless)".to_owned(),
                     vec![
-                        Curve::new("⟨s(0)·s(t)⟩", t.iter().map(|&(x, a, _)| (x, a)).collect()),
-                        Curve::new(
+                        Line::new("⟨s(0)·s(t)⟩", t.iter().map(|&(x, a, _)| (x, a)).collect()),
+                        Line::new(
                             "⟨P₂(s(0)·s(t))⟩",
                             t.iter().map(|&(x, _, b)| (x, b)).collect(),
                         ),
@@ -440,7 +440,7 @@ pub(crate) fn write_observables(
             if let Some(p) = energy_plot(&rows, info, &au) {
                 let p = plot(p.0, x_label.clone(), p.1, p.2);
                 let path = dir.join("series-energy.svg");
-                plot_svg(&path, &p)?;
+                write_plot(&path, &p)?;
                 if path.exists() {
                     files.push("series-energy.svg".into());
                 }
@@ -450,7 +450,7 @@ pub(crate) fn write_observables(
                 "Pressure",
                 x_label,
                 format!("P ({})", au.pressure),
-                vec![Curve {
+                vec![Line {
                     label: "P over each sampling interval".to_owned(),
                     points: rows.iter().map(|r| (r.time, r.pressure)).collect(),
                     dashed: false,
@@ -462,7 +462,7 @@ pub(crate) fn write_observables(
                 }],
             );
             let path = dir.join("series-pressure.svg");
-            plot_svg(&path, &p)?;
+            write_plot(&path, &p)?;
             if path.exists() {
                 files.push("series-pressure.svg".into());
             }
@@ -488,12 +488,12 @@ fn energy_plot(
     rows: &[crate::analysis::observable::SeriesRow],
     info: &PlotInfo,
     au: &AxisUnits,
-) -> Option<(&'static str, String, Vec<Curve>)> {
+) -> Option<(&'static str, String, Vec<Line>)> {
     let n = info.n.max(1) as f64;
     let column = |f: fn(&crate::analysis::observable::SeriesRow) -> f64| -> Vec<f64> {
         rows.iter().map(|r| f(r) / n).collect()
     };
-    let curve = |label: &str, values: Vec<f64>, mean: Option<(f64, Option<f64>)>| Curve {
+    let curve = |label: &str, values: Vec<f64>, mean: Option<(f64, Option<f64>)>| Line {
         label: label.to_owned(),
         points: rows.iter().map(|r| r.time).zip(values).collect(),
         dashed: false,
@@ -511,7 +511,8 @@ fn energy_plot(
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
                 (a.min(x), b.max(x))
             });
-        if !(hi - lo > 1e-9 * hi.abs().max(lo.abs())) {
+        let spread = hi - lo;
+        if spread.is_nan() || spread <= 1e-9 * hi.abs().max(lo.abs()) {
             return None;
         }
         let mean = block_mean(&kinetic);
