@@ -197,6 +197,8 @@ fn sig(x: f64) -> String {
     if !x.is_finite() || x == 0.0 {
         return format!("{x}");
     }
+    // Rounded to four digits first, so that 0.99999 is `1.000`, not `1.0000`.
+    let x: f64 = format!("{x:.3e}").parse().unwrap_or(x);
     let mag = x.abs().log10().floor();
     if !(-4.0..6.0).contains(&mag) {
         return format!("{x:.3e}");
@@ -534,4 +536,43 @@ fn energy_plot(
             curve("E/N", total, tm),
         ],
     ))
+}
+
+#[cfg(test)]
+mod plot_tests {
+    use super::*;
+
+    #[test]
+    fn captions_and_legends_round_their_numbers() {
+        assert_eq!(sig(530.539), "530.5");
+        assert_eq!(sig(0.017_885_380_6), "0.01789");
+        assert_eq!(sig(0.99999), "1.000");
+        assert_eq!(sig(1312.07), "1312");
+        assert_eq!(mean_label(1179.3, Some(25.4), "bar"), "mean 1179 ± 25 bar");
+        assert_eq!(
+            mean_label(10.4771, Some(0.01432), "kJ/mol"),
+            "mean 10.477 ± 0.014 kJ/mol"
+        );
+        assert_eq!(
+            mean_label(4.458, Some(2.8e-15), "kJ/mol"),
+            "mean 4.458 ± 2.8e-15 kJ/mol"
+        );
+        assert_eq!(mean_label(8.7812, None, "ε/σ³"), "mean 8.781 ε/σ³");
+    }
+
+    #[test]
+    fn the_msd_fit_recovers_the_slope_of_the_straight_tail() {
+        // MSD = 6 D t + c with D = 0.25 beyond a ballistic start.
+        let t: Vec<(f64, f64)> = (0..40)
+            .map(|k| {
+                let t = 0.1 * k as f64;
+                (t, if t < 1.0 { 3.0 * t * t } else { 1.5 * t + 1.5 })
+            })
+            .collect();
+        let (a, b) = msd_fit(&t).unwrap();
+        assert!(
+            (b / 6.0 - 0.25).abs() < 1e-12 && (a - 1.5).abs() < 1e-12,
+            "{a} {b}"
+        );
+    }
 }
