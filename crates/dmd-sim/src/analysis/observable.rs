@@ -10,7 +10,14 @@ use glam::DVec3;
 use crate::analysis::pairs::{for_each_pair, wrap};
 use crate::engine::simulation::{Sampler, View};
 
-/// Radial distribution function `g(r)` of all pairs.
+/// Radial distribution function `g(r)` of all pairs, and for bodies of two or more species
+/// the partial `g_ab(r)` of every unordered pair of species `a ≤ b`.
+///
+/// Normalisation: `g(r)` counts pairs in a shell against the `N (N − 1) / 2` pairs of an
+/// ideal gas at the same density; `g_aa(r)` against `N_a (N_a − 1) / 2` and `g_ab(r)` (`a ≠
+/// b`) against `N_a N_b`, so every one tends to 1 at large `r` in an ideal mixture and
+/// `g = Σ_a N_a (N_a − 1) g_aa / (N (N − 1)) + Σ_{a<b} 2 N_a N_b g_ab / (N (N − 1))` holds bin
+/// by bin.
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct Rdf {
     every: u64,
@@ -21,6 +28,19 @@ pub struct Rdf {
     samples: u64,
     n: usize,
     volume: f64,
+    /// Bodies of each species (set at the first evaluation; empty before).
+    members: Vec<u64>,
+    /// Counts of every pair of species `a ≤ b` ([`pair_index`]), `bins` each; empty for one
+    /// species.
+    partial: Vec<u64>,
+}
+
+/// Index of the unordered pair of species `a ≤ b` among `kinds` species: `(0,0), (0,1), …,
+/// (0,k−1), (1,1), …`.
+fn pair_index(a: usize, b: usize, kinds: usize) -> usize {
+    let (a, b) = if a <= b { (a, b) } else { (b, a) };
+    // The pairs (i, ·) with i < a come first: k + (k − 1) + … + (k − a + 1) of them.
+    a * (2 * kinds + 1 - a) / 2 + (b - a)
 }
 
 impl Rdf {
@@ -36,6 +56,8 @@ impl Rdf {
             samples: 0,
             n: 0,
             volume: 0.0,
+            members: Vec::new(),
+            partial: Vec::new(),
         }
     }
 
@@ -48,41 +70,119 @@ impl Rdf {
         let pos: Vec<DVec3> = (0..n)
             .map(|i| wrap(view.position(i), view.lengths))
             .collect();
-        let l = view.lengths;
+        let species: Vec<u32> = view.bodies.iter().map(|b| b.species).collect();
+        self.accumulate(&pos, &species, view.lengths);
+    }
+
+    /// Adds the pairs of one configuration: positions wrapped into the box `l`, and the
+    /// species of each body.
+    fn accumulate(&mut self, pos: &[DVec3], species: &[u32], l: DVec3) {
+        let n = pos.len();
+        let bins = self.counts.len();
+        if self.members.is_empty() {
+            let kinds = species.iter().map(|&s| s as usize + 1).max().unwrap_or(0);
+            self.members = vec![0; kinds];
+            for &s in species {
+                self.members[s as usize] += 1;
+            }
+            if kinds >= 2 {
+                self.partial = vec![0; kinds * (kinds + 1) / 2 * bins];
+            }
+        }
+        let kinds = self.members.len();
         self.n = n;
         self.volume = l.x * l.y * l.z;
         self.samples += 1;
         let r2max = self.r_max * self.r_max;
         let inv_w = 1.0 / self.width;
         let counts = &mut self.counts;
-        for_each_pair(&pos, l, self.r_max, |_, _, d| {
+        let partial = &mut self.partial;
+        for_each_pair(pos, l, self.r_max, |i, j, d| {
             let r2 = d.length_squared();
             if r2 < r2max {
                 let k = (r2.sqrt() * inv_w) as usize;
-                if let Some(c) = counts.get_mut(k) {
-                    *c += 1;
+                if k < bins {
+                    counts[k] += 1;
+                    if !partial.is_empty() {
+                        let p = pair_index(species[i] as usize, species[j] as usize, kinds);
+                        partial[p * bins + k] += 1;
+                    }
                 }
             }
         });
     }
 
+    /// Volume of the shell of bin `k` times the samples taken.
+    fn shell(&self, k: usize) -> (f64, f64) {
+        let (a, b) = (k as f64 * self.width, (k + 1) as f64 * self.width);
+        let shell = 4.0 / 3.0 * std::f64::consts::PI * (b * b * b - a * a * a);
+        (0.5 * (a + b), shell * self.samples as f64 / self.volume)
+    }
+
     /// Rows `(r at bin centre, g(r))`.
     pub fn table(&self) -> Vec<(f64, f64)> {
         let n = self.n as f64;
-        let rho = (n - 1.0) / self.volume;
-        self.counts
-            .iter()
-            .enumerate()
-            .map(|(k, &c)| {
-                let (a, b) = (k as f64 * self.width, (k + 1) as f64 * self.width);
-                let shell = 4.0 / 3.0 * std::f64::consts::PI * (b * b * b - a * a * a);
-                let ideal = 0.5 * n * rho * shell * self.samples as f64;
-                (
-                    0.5 * (a + b),
-                    if ideal > 0.0 { c as f64 / ideal } else { 0.0 },
-                )
+        (0..self.counts.len())
+            .map(|k| {
+                let (r, shell) = self.shell(k);
+                (r, ratio(self.counts[k], 0.5 * n * (n - 1.0) * shell))
             })
             .collect()
+    }
+
+    /// Bodies of each species in the sampled configurations (empty before the first).
+    pub fn members(&self) -> &[u64] {
+        &self.members
+    }
+
+    /// The partial `g_ab(r)` of every pair of species `a ≤ b`, in the order `(0,0), (0,1), …,
+    /// (1,1), …`. Empty for one species.
+    pub fn partials(&self) -> Vec<PartialRdf> {
+        let kinds = self.members.len();
+        if self.partial.is_empty() {
+            return Vec::new();
+        }
+        let bins = self.counts.len();
+        let mut out = Vec::new();
+        for a in 0..kinds {
+            for b in a..kinds {
+                let (na, nb) = (self.members[a] as f64, self.members[b] as f64);
+                let pairs = if a == b {
+                    0.5 * na * (na - 1.0)
+                } else {
+                    na * nb
+                };
+                let p = pair_index(a, b, kinds);
+                let rows = (0..bins)
+                    .map(|k| {
+                        let (r, shell) = self.shell(k);
+                        (r, ratio(self.partial[p * bins + k], pairs * shell))
+                    })
+                    .collect();
+                out.push(PartialRdf { a, b, rows });
+            }
+        }
+        out
+    }
+}
+
+/// The partial radial distribution function of one pair of species ([`Rdf::partials`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PartialRdf {
+    /// The first species (index in the scene's order).
+    pub a: usize,
+    /// The second species, `b ≥ a`.
+    pub b: usize,
+    /// Rows `(r at bin centre, g_ab(r))`.
+    pub rows: Vec<(f64, f64)>,
+}
+
+/// `count / ideal`, 0 where the ideal count is 0 (a species of one body, an empty shell).
+fn ratio(count: u64, ideal: f64) -> f64 {
+    if ideal > 0.0 {
+        count as f64 / ideal
+    } else {
+        0.0
     }
 }
 
@@ -439,5 +539,97 @@ impl Sampler for Observers {
             ));
         }
         None
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{RngExt, SeedableRng};
+
+    #[test]
+    fn pair_indices_cover_every_pair_of_species_once() {
+        for kinds in 1..6 {
+            let mut seen = vec![0; kinds * (kinds + 1) / 2];
+            for a in 0..kinds {
+                for b in a..kinds {
+                    seen[pair_index(a, b, kinds)] += 1;
+                    assert_eq!(pair_index(a, b, kinds), pair_index(b, a, kinds));
+                }
+            }
+            assert!(seen.iter().all(|&c| c == 1), "{kinds} species: {seen:?}");
+        }
+    }
+
+    /// An ideal mixture (uniform random positions) of three species in unequal numbers: every
+    /// partial g tends to 1, and their pair-weighted sum is the total g in every bin.
+    #[test]
+    fn partials_of_an_ideal_mixture_are_one_and_sum_to_the_total() {
+        let l = DVec3::new(10.0, 10.0, 12.0);
+        let species: Vec<u32> = (0..300).map(|i| [0, 0, 0, 1, 1, 2][i % 6]).collect();
+        let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(7);
+        let mut rdf = Rdf::new(10, 5.0, 1);
+        for _ in 0..200 {
+            let pos: Vec<DVec3> = species
+                .iter()
+                .map(|_| {
+                    DVec3::new(
+                        rng.random::<f64>() * l.x,
+                        rng.random::<f64>() * l.y,
+                        rng.random::<f64>() * l.z,
+                    )
+                })
+                .collect();
+            rdf.accumulate(&pos, &species, l);
+        }
+        assert_eq!(rdf.members(), &[150, 100, 50]);
+        let total = rdf.table();
+        let partials = rdf.partials();
+        assert_eq!(partials.len(), 6);
+        let n = 300.0f64;
+        for (k, &(r, g)) in total.iter().enumerate() {
+            let mut sum = 0.0;
+            for PartialRdf { a, b, rows } in &partials {
+                let (na, nb) = (rdf.members()[*a] as f64, rdf.members()[*b] as f64);
+                let pairs = if a == b {
+                    na * (na - 1.0)
+                } else {
+                    2.0 * na * nb
+                };
+                let w = pairs / (n * (n - 1.0));
+                sum += w * rows[k].1;
+                // Beyond the first bins (few pairs), each partial is 1 within its noise.
+                if r > 1.5 {
+                    assert!(
+                        (rows[k].1 - 1.0).abs() < 0.05,
+                        "g_{a}{b}({r}) = {}",
+                        rows[k].1
+                    );
+                }
+            }
+            assert!(
+                (sum - g).abs() < 1e-12 * g.max(1.0),
+                "bin {k}: {sum} vs {g}"
+            );
+            if r > 1.5 {
+                assert!((g - 1.0).abs() < 0.02, "g({r}) = {g}");
+            }
+        }
+    }
+
+    #[test]
+    fn one_species_has_no_partials() {
+        let l = DVec3::splat(6.0);
+        let pos: Vec<DVec3> = (0..27)
+            .map(|i| DVec3::new((i % 3) as f64, ((i / 3) % 3) as f64, (i / 9) as f64) * 2.0)
+            .collect();
+        let mut rdf = Rdf::new(10, 3.0, 1);
+        rdf.accumulate(&pos, &[0; 27], l);
+        assert!(rdf.partials().is_empty());
+        // The simple cubic lattice of spacing 2: six neighbours at r = 2 (bin 6 of width 0.3).
+        let t = rdf.table();
+        let shell = 4.0 / 3.0 * std::f64::consts::PI * (2.1f64.powi(3) - 1.8f64.powi(3));
+        let expected = 27.0 * 6.0 / 2.0 / (0.5 * 27.0 * 26.0 * shell / 216.0);
+        assert!((t[6].1 - expected).abs() < 1e-9 * expected, "{:?}", t[6]);
     }
 }

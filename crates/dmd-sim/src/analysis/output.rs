@@ -104,7 +104,333 @@ pub fn write_csv(path: &Path, header: &[&str], rows: &[Vec<f64>]) -> Result<(), 
     write_atomically(path, text.as_bytes())
 }
 
-/// One curve of a plot.
+/// A horizontal line at a curve's mean, with a shaded band of ± its error.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Mean {
+    /// Legend of the line, with its value and unit (`mean 1312 ± 45 bar`).
+    pub label: String,
+    /// The mean (the curve's unit).
+    pub value: f64,
+    /// Its error, the band's half-width (none: the line alone).
+    pub error: Option<f64>,
+}
+
+/// One curve of a [`Plot`].
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Line {
+    /// Legend.
+    pub label: String,
+    /// Points.
+    pub points: Vec<(f64, f64)>,
+    /// Drawn dashed (a fit or a reference line) instead of solid.
+    pub dashed: bool,
+    /// A line at the curve's mean with its error band, in the curve's colour.
+    pub mean: Option<Mean>,
+}
+
+impl Line {
+    /// A solid line without a mean.
+    pub fn new(label: impl Into<String>, points: Vec<(f64, f64)>) -> Self {
+        Line {
+            label: label.into(),
+            points,
+            dashed: false,
+            mean: None,
+        }
+    }
+}
+
+/// What a plot shows: a title, a caption naming the system, axis labels with their units,
+/// and the curves.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Plot {
+    /// What is plotted (`Radial distribution function`).
+    pub title: String,
+    /// The system, under the title (`rods-paper: N = 512, T = 530.5 K, …`).
+    pub caption: String,
+    /// The x axis with its unit (`t (ps)`).
+    pub x_label: String,
+    /// The y axis with its unit (`P (bar)`).
+    pub y_label: String,
+    /// The curves; a legend lists those with a label, and the means.
+    pub lines: Vec<Line>,
+}
+
+/// The range `(x0, x1, y0, y1)` of the finite points and mean bands of `curves`, padded in y;
+/// none without a finite point.
+fn plot_range(curves: &[Line]) -> Option<(f64, f64, f64, f64)> {
+    let finite = |p: &&(f64, f64)| p.0.is_finite() && p.1.is_finite();
+    let mut any = false;
+    let (mut x0, mut x1, mut y0, mut y1) = (
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+    );
+    for c in curves {
+        for p in c.points.iter().filter(finite) {
+            any = true;
+            (x0, x1, y0, y1) = (x0.min(p.0), x1.max(p.0), y0.min(p.1), y1.max(p.1));
+        }
+        if let Some(m) = c.mean.as_ref().filter(|m| m.value.is_finite()) {
+            let e = m.error.filter(|e| e.is_finite()).unwrap_or(0.0).abs();
+            (y0, y1) = (y0.min(m.value - e), y1.max(m.value + e));
+        }
+    }
+    if !any {
+        return None;
+    }
+    if x1 <= x0 {
+        x1 = x0 + 1.0;
+        x0 -= 1.0;
+    }
+    let pad = 0.05 * (y1 - y0).abs().max(1e-12 * y1.abs()).max(1e-300);
+    Some((x0, x1, y0 - pad, y1 + pad))
+}
+
+/// Where the legend goes: the place, of the nine plotters offers, whose box (`w` × `h`, as
+/// fractions of the plotting area) covers the fewest points of the curves and mean lines
+/// (sampled along their segments), the upper right first among equals. Returns the place as
+/// `(column, row)`, each 0, 1 or 2 (left/top, middle, right/bottom), and the points it covers.
+fn legend_place(
+    curves: &[Line],
+    (x0, x1, y0, y1): (f64, f64, f64, f64),
+    w: f64,
+    h: f64,
+) -> ((usize, usize), usize) {
+    let norm = |(x, y): (f64, f64)| ((x - x0) / (x1 - x0), (y - y0) / (y1 - y0));
+    let mut samples: Vec<(f64, f64)> = Vec::new();
+    let mut trace = |pts: &mut dyn Iterator<Item = (f64, f64)>| {
+        let mut last: Option<(f64, f64)> = None;
+        for p in pts.filter(|p| p.0.is_finite() && p.1.is_finite()).map(norm) {
+            if let Some(q) = last {
+                let n = (((p.0 - q.0).abs() + (p.1 - q.1).abs()) * 100.0)
+                    .ceil()
+                    .clamp(1.0, 200.0);
+                for k in 1..=n as usize {
+                    let f = k as f64 / n;
+                    samples.push((q.0 + f * (p.0 - q.0), q.1 + f * (p.1 - q.1)));
+                }
+            } else {
+                samples.push(p);
+            }
+            last = Some(p);
+        }
+    };
+    for c in curves {
+        trace(&mut c.points.iter().copied());
+        if let Some(m) = &c.mean {
+            let e = m.error.filter(|e| e.is_finite()).unwrap_or(0.0);
+            for y in [m.value - e, m.value, m.value + e] {
+                trace(&mut [(x0, y), (x1, y)].into_iter());
+            }
+        }
+    }
+    let span = |k: usize, size: f64| match k {
+        0 => (0.0, size),
+        1 => (0.5 - 0.5 * size, 0.5 + 0.5 * size),
+        _ => (1.0 - size, 1.0),
+    };
+    let places = [
+        (2, 0),
+        (0, 0),
+        (2, 2),
+        (0, 2),
+        (2, 1),
+        (1, 0),
+        (1, 2),
+        (0, 1),
+        (1, 1),
+    ];
+    places
+        .into_iter()
+        .map(|(col, row)| {
+            let (a, b) = span(col, w);
+            // Rows count from the top, y from the bottom.
+            let (c, d) = span(2 - row, h);
+            let covered = samples
+                .iter()
+                .filter(|p| (a..=b).contains(&p.0) && (c..=d).contains(&p.1))
+                .count();
+            ((col, row), covered)
+        })
+        .min_by_key(|&(_, covered)| covered)
+        .unwrap_or(((2, 0), 0))
+}
+
+/// Tick labels for an axis from `lo` to `hi`: as many decimals as ticks about a tenth of the
+/// range apart need (`2000`, `0.2`, `0.05`), e-notation for very large or small numbers.
+fn tick_label(lo: f64, hi: f64) -> impl Fn(&f64) -> String {
+    let range = (hi - lo).abs();
+    let big = lo.abs().max(hi.abs());
+    let scientific = big >= 1e6 || (range > 0.0 && range < 1e-3);
+    let decimals = if range > 0.0 {
+        (-(range / 10.0).log10().floor()).clamp(0.0, 6.0) as usize
+    } else {
+        3
+    };
+    move |x: &f64| {
+        if scientific && *x != 0.0 {
+            let s = format!("{x:.2e}");
+            let (m, e) = s.split_once('e').unwrap_or((&s, "0"));
+            let m = m.trim_end_matches('0').trim_end_matches('.');
+            format!("{m}e{e}")
+        } else {
+            // No `-0` for a tick at zero.
+            let s = format!("{x:.decimals$}");
+            if s.trim_start_matches('-')
+                .chars()
+                .all(|c| c == '0' || c == '.')
+            {
+                s.trim_start_matches('-').to_owned()
+            } else {
+                s
+            }
+        }
+    }
+}
+
+/// Draws a plot into an SVG file (written atomically): the title, the caption under it, the
+/// axes with their labels, each curve in its own colour (dashed if asked; lighter when it has
+/// a mean, which is drawn over it as a line on a shaded band of ± its error), and a legend of
+/// the labelled curves with their means where it covers the fewest points (above the curves,
+/// the y axis lengthened, when it would cover some anywhere). Nothing is written when no curve has a finite point.
+///
+/// # Errors
+/// [`OutputError`].
+pub fn write_plot(path: &Path, plot: &Plot) -> Result<(), OutputError> {
+    use plotters::prelude::*;
+    let tmp = temporary(path);
+    let finite = |p: &&(f64, f64)| p.0.is_finite() && p.1.is_finite();
+    let Some((x0, x1, y0, mut y1)) = plot_range(&plot.lines) else {
+        return Ok(());
+    };
+    // One legend entry per labelled curve; a curve with a mean has one entry for both, drawn
+    // as the mean's line on its band.
+    let entry = |c: &Line| -> Option<String> {
+        match (&c.mean, c.label.is_empty()) {
+            (Some(m), false) => Some(format!("{}: {}", c.label, m.label)),
+            (Some(m), true) => Some(m.label.clone()),
+            (None, false) => Some(c.label.clone()),
+            (None, true) => None,
+        }
+    };
+    let entries: Vec<String> = plot.lines.iter().filter_map(entry).collect();
+    // The legend's box as a fraction of the plotting area (about 7 pixels a character, 19 a
+    // line, in a plotting area of about 650 × 350 pixels). Where every place would cover a
+    // curve, the y axis is lengthened to leave the top free for it.
+    let chars = entries.iter().map(|l| l.chars().count()).max().unwrap_or(0);
+    let w = (40.0 + 7.0 * chars as f64) / 650.0;
+    let h = (12.0 + 19.0 * entries.len() as f64) / 350.0;
+    let (mut place, covered) = legend_place(&plot.lines, (x0, x1, y0, y1), w, h);
+    if covered > 0 && h < 0.6 {
+        y1 = y0 + (y1 - y0) / (1.0 - h - 0.03);
+        place = (2, 0);
+    }
+    let draw = || -> Result<(), Box<dyn std::error::Error>> {
+        let root = SVGBackend::new(&tmp, (760, 480)).into_drawing_area();
+        root.fill(&WHITE)?;
+        let mut area = root.titled(&plot.title, ("sans-serif", 20))?;
+        if !plot.caption.is_empty() {
+            area = area.titled(&plot.caption, ("sans-serif", 14))?;
+        }
+        let mut chart = ChartBuilder::on(&area)
+            .margin(12)
+            .x_label_area_size(44)
+            .y_label_area_size(78)
+            .build_cartesian_2d(x0..x1, y0..y1)?;
+        chart
+            .configure_mesh()
+            .x_desc(plot.x_label.as_str())
+            .y_desc(plot.y_label.as_str())
+            .axis_desc_style(("sans-serif", 15))
+            .x_label_formatter(&tick_label(x0, x1))
+            .y_label_formatter(&tick_label(y0, y1))
+            .draw()?;
+        // Dark enough to read on white (plotters' GREEN and CYAN are not).
+        let colors = [
+            BLUE,
+            RED,
+            BLACK,
+            RGBColor(0, 140, 0),
+            MAGENTA,
+            RGBColor(0, 140, 160),
+        ];
+        for (k, c) in plot.lines.iter().enumerate() {
+            let color = colors[k % colors.len()];
+            let mean = c.mean.as_ref().filter(|m| m.value.is_finite());
+            // A curve with a mean is drawn lighter and thinner, its mean and band over it.
+            let style = if mean.is_some() {
+                color.mix(0.55).stroke_width(1)
+            } else {
+                color.stroke_width(2)
+            };
+            let pts: Vec<(f64, f64)> = c.points.iter().filter(finite).copied().collect();
+            let anno = if c.dashed {
+                chart.draw_series(DashedLineSeries::new(pts, 8, 5, style))?
+            } else {
+                chart.draw_series(LineSeries::new(pts, style))?
+            };
+            let label = entry(c);
+            if let (None, Some(label)) = (mean, &label) {
+                anno.label(label.as_str())
+                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], style));
+            }
+            if let Some(m) = mean {
+                let error = m.error.filter(|e| e.is_finite() && *e > 0.0);
+                if let Some(e) = error {
+                    chart.draw_series(std::iter::once(Rectangle::new(
+                        [(x0, m.value - e), (x1, m.value + e)],
+                        color.mix(0.22).filled(),
+                    )))?;
+                }
+                let band = error.is_some();
+                chart
+                    .draw_series(LineSeries::new(
+                        [(x0, m.value), (x1, m.value)],
+                        color.stroke_width(2),
+                    ))?
+                    .label(label.unwrap_or_default())
+                    .legend(move |(x, y)| {
+                        let fill = if band {
+                            color.mix(0.22)
+                        } else {
+                            WHITE.mix(0.0)
+                        };
+                        EmptyElement::at((x, y))
+                            + Rectangle::new([(0, -5), (18, 5)], fill.filled())
+                            + PathElement::new(vec![(0, 0), (18, 0)], color.stroke_width(2))
+                    });
+            }
+        }
+        if !entries.is_empty() {
+            let position = match place {
+                (0, 0) => SeriesLabelPosition::UpperLeft,
+                (0, 1) => SeriesLabelPosition::MiddleLeft,
+                (0, _) => SeriesLabelPosition::LowerLeft,
+                (1, 0) => SeriesLabelPosition::UpperMiddle,
+                (1, 1) => SeriesLabelPosition::MiddleMiddle,
+                (1, _) => SeriesLabelPosition::LowerMiddle,
+                (_, 0) => SeriesLabelPosition::UpperRight,
+                (_, 1) => SeriesLabelPosition::MiddleRight,
+                _ => SeriesLabelPosition::LowerRight,
+            };
+            chart
+                .configure_series_labels()
+                .position(position)
+                .label_font(("sans-serif", 13))
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .draw()?;
+        }
+        root.present()?;
+        Ok(())
+    };
+    draw().map_err(|e| io_err(&tmp, e))?;
+    std::fs::rename(&tmp, path).map_err(|e| io_err(path, e))
+}
+
+/// One curve of a plot drawn by [`plot_svg`].
 pub struct Curve<'a> {
     /// Legend.
     pub label: &'a str,
@@ -112,7 +438,8 @@ pub struct Curve<'a> {
     pub points: Vec<(f64, f64)>,
 }
 
-/// Draws curves into an SVG file (written atomically).
+/// Draws curves into an SVG file (written atomically) with [`write_plot`]: a title, axis
+/// labels and, for more than one curve, a legend.
 ///
 /// # Errors
 /// [`OutputError`].
@@ -123,67 +450,20 @@ pub fn plot_svg(
     y_label: &str,
     curves: &[Curve<'_>],
 ) -> Result<(), OutputError> {
-    use plotters::prelude::*;
-    let tmp = temporary(path);
-    let finite = |p: &&(f64, f64)| p.0.is_finite() && p.1.is_finite();
-    let all: Vec<(f64, f64)> = curves
-        .iter()
-        .flat_map(|c| c.points.iter().filter(finite).copied())
-        .collect();
-    if all.is_empty() {
-        return Ok(());
-    }
-    let (mut x0, mut x1, mut y0, mut y1) = all.iter().fold(
-        (
-            f64::INFINITY,
-            f64::NEG_INFINITY,
-            f64::INFINITY,
-            f64::NEG_INFINITY,
-        ),
-        |(a, b, c, d), p| (a.min(p.0), b.max(p.0), c.min(p.1), d.max(p.1)),
-    );
-    if x1 <= x0 {
-        x1 = x0 + 1.0;
-        x0 -= 1.0;
-    }
-    let pad = 0.05 * (y1 - y0).abs().max(1e-12 * y1.abs()).max(1e-300);
-    y0 -= pad;
-    y1 += pad;
-    let draw = || -> Result<(), Box<dyn std::error::Error>> {
-        let root = SVGBackend::new(&tmp, (720, 420)).into_drawing_area();
-        root.fill(&WHITE)?;
-        let mut chart = ChartBuilder::on(&root)
-            .caption(title, ("sans-serif", 18))
-            .margin(12)
-            .x_label_area_size(40)
-            .y_label_area_size(70)
-            .build_cartesian_2d(x0..x1, y0..y1)?;
-        chart
-            .configure_mesh()
-            .x_desc(x_label)
-            .y_desc(y_label)
-            .draw()?;
-        let colors = [BLUE, RED, BLACK, GREEN, MAGENTA, CYAN];
-        for (k, c) in curves.iter().enumerate() {
-            let color = colors[k % colors.len()];
-            let pts: Vec<(f64, f64)> = c.points.iter().filter(finite).copied().collect();
-            chart
-                .draw_series(LineSeries::new(pts, color.stroke_width(2)))?
-                .label(c.label)
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color));
-        }
-        if curves.len() > 1 {
-            chart
-                .configure_series_labels()
-                .background_style(WHITE.mix(0.8))
-                .border_style(BLACK)
-                .draw()?;
-        }
-        root.present()?;
-        Ok(())
-    };
-    draw().map_err(|e| io_err(&tmp, e))?;
-    std::fs::rename(&tmp, path).map_err(|e| io_err(path, e))
+    let legend = curves.len() > 1;
+    write_plot(
+        path,
+        &Plot {
+            title: title.to_owned(),
+            caption: String::new(),
+            x_label: x_label.to_owned(),
+            y_label: y_label.to_owned(),
+            lines: curves
+                .iter()
+                .map(|c| Line::new(if legend { c.label } else { "" }, c.points.clone()))
+                .collect(),
+        },
+    )
 }
 
 /// How a trajectory frame draws the bodies of one species.

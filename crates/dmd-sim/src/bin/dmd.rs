@@ -976,10 +976,17 @@ fn main() -> ExitCode {
 /// `dmd run` of a scene with `engine = "smd"`.
 fn run_smd(scene: &Path, s: &Scene, base: &Path, out: &Path, quiet: bool) -> ExitCode {
     let mut terminal = Terminal::new(scene, out);
+    let name = scene.file_stem().map(|s| s.to_string_lossy().into_owned());
     let result = if quiet {
-        smd_engine::run_with(s, base, Some(out), &mut dmd_sim::run::Quiet)
+        smd_engine::run_named(
+            s,
+            base,
+            Some(out),
+            &mut dmd_sim::run::Quiet,
+            name.as_deref(),
+        )
     } else {
-        smd_engine::run_with(s, base, Some(out), &mut terminal)
+        smd_engine::run_named(s, base, Some(out), &mut terminal, name.as_deref())
     };
     match result {
         Ok(summary) => {

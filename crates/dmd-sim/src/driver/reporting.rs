@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use crate::analysis::observable::Observers;
-use crate::analysis::output::{Curve, OutputError, plot_svg, write_csv};
+use crate::analysis::output::{Line, Mean, OutputError, Plot, write_csv, write_plot};
 use crate::config::scene::{SceneError, UnitSystem};
 use crate::config::units::Units;
 use crate::driver::checkpoint::CheckpointError;
@@ -131,60 +131,272 @@ pub fn thread_cpu_seconds() -> Option<f64> {
     Some(ns * 1e-9)
 }
 
+/// What the plots of a run say besides their data: the system named in every caption, and the
+/// production means with their block-average errors drawn over the series. Numbers are in the
+/// scene's units (as the summary's).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub(crate) struct PlotInfo {
+    /// The scene's name (its file's stem), when the run knows it.
+    pub scene: Option<String>,
+    /// Bodies.
+    pub n: u64,
+    /// Mean kinetic temperature of production.
+    pub temperature: f64,
+    /// Number density N/V (per length³).
+    pub density: f64,
+    /// The terrace step ΔV (energy) of a terraced run whose pairs share one.
+    pub terrace_step: Option<f64>,
+    /// Species names, in the scene's order.
+    pub species: Vec<String>,
+    /// Mean pressure of production and its error.
+    pub pressure: (f64, Option<f64>),
+    /// Mean potential energy per body of production and its error.
+    pub potential_per_body: (f64, Option<f64>),
+}
+
+impl PlotInfo {
+    /// The system, with its scene and the units in `names`: `rods-paper: N = 512, T = 530.5 K,
+    /// ρ = 0.01789 Å⁻³, ΔV = 2.1 kJ/mol`.
+    fn caption(&self, names: &AxisUnits) -> String {
+        let mut text = match &self.scene {
+            Some(s) => format!("{s}: "),
+            None => String::new(),
+        };
+        text.push_str(&format!(
+            "N = {}, T = {} {}, ρ = {} {}",
+            self.n,
+            sig(self.temperature),
+            names.temperature,
+            sig(self.density),
+            names.density
+        ));
+        if let Some(dv) = self.terrace_step {
+            text.push_str(&format!(", ΔV = {} {}", sig(dv), names.energy));
+        }
+        if names.reduced {
+            text.push_str(" (reduced units)");
+        }
+        text
+    }
+}
+
+/// The terrace step ΔV (scene energy unit) of a scene in internal units whose terraced pairs
+/// all have the same evenly spaced terraces (`step` or `step_kt`); none otherwise.
+pub(crate) fn terrace_step(scene: &crate::config::scene::Scene, units: &Units) -> Option<f64> {
+    let kt = scene.init.temperature;
+    let mut steps = scene
+        .pair
+        .iter()
+        .filter_map(|p| p.terraces.as_ref())
+        .map(|t| t.step.or(t.step_kt.map(|x| x * kt)));
+    let first = steps.next()??;
+    steps
+        .all(|s| s == Some(first))
+        .then(|| units.energy_out(first))
+}
+
+/// The units axis labels carry: molecular units by name, reduced units in σ (length), ε
+/// (energy) and τ = σ√(m/ε) (time).
+struct AxisUnits {
+    length: &'static str,
+    time: &'static str,
+    energy: &'static str,
+    temperature: &'static str,
+    pressure: &'static str,
+    density: &'static str,
+    area: &'static str,
+    diffusion: &'static str,
+    speed_squared: &'static str,
+    reduced: bool,
+}
+
+fn axis_units(units: &Units) -> AxisUnits {
+    match units.system {
+        crate::config::scene::UnitSystem::Molecular => AxisUnits {
+            length: "Å",
+            time: "ps",
+            energy: "kJ/mol",
+            temperature: "K",
+            pressure: "bar",
+            density: "Å⁻³",
+            area: "Å²",
+            diffusion: "Å²/ps",
+            speed_squared: "Å²/ps²",
+            reduced: false,
+        },
+        crate::config::scene::UnitSystem::Reduced => AxisUnits {
+            length: "σ",
+            time: "τ",
+            energy: "ε",
+            temperature: "ε/k_B",
+            pressure: "ε/σ³",
+            density: "σ⁻³",
+            area: "σ²",
+            diffusion: "σ²/τ",
+            speed_squared: "σ²/τ²",
+            reduced: true,
+        },
+    }
+}
+
+/// `x` with four significant digits (`530.5`, `0.01789`, `1312`), in e-notation when very
+/// large or small.
+fn sig(x: f64) -> String {
+    if !x.is_finite() || x == 0.0 {
+        return format!("{x}");
+    }
+    // Rounded to four digits first, so that 0.99999 is `1.000`, not `1.0000`.
+    let x: f64 = format!("{x:.3e}").parse().unwrap_or(x);
+    let mag = x.abs().log10().floor();
+    if !(-4.0..6.0).contains(&mag) {
+        return format!("{x:.3e}");
+    }
+    let decimals = (3.0 - mag).max(0.0) as usize;
+    format!("{x:.decimals$}")
+}
+
+/// The legend of a mean: `mean 1207 ± 30 bar`, the error to two significant digits and the
+/// mean to the same decimals (four significant digits when the error is below a millionth of
+/// it, `mean 4.491 ± 1.2e-15 kJ/mol`).
+fn mean_label(value: f64, error: Option<f64>, unit: &str) -> String {
+    match error.filter(|e| e.is_finite() && *e > 0.0) {
+        Some(e) if e < 1e-6 * value.abs() => format!("mean {} ± {e:.1e} {unit}", sig(value)),
+        Some(e) => {
+            let decimals = (1.0 - e.log10().floor()).clamp(0.0, 12.0) as usize;
+            format!("mean {value:.decimals$} ± {e:.decimals$} {unit}")
+        }
+        None => format!("mean {} {unit}", sig(value)),
+    }
+}
+
+/// The mean of the finite values of `x` and, with 16 or more, its block-average error.
+fn block_mean(x: &[f64]) -> Option<(f64, Option<f64>)> {
+    let finite: Vec<f64> = x.iter().copied().filter(|v| v.is_finite()).collect();
+    if finite.is_empty() {
+        return None;
+    }
+    let b = crate::analysis::block::block_average(&finite);
+    Some((b.mean, b.error.is_finite().then_some(b.error)))
+}
+
+/// The least-squares line `a + b t` through the second half of the MSD's lags (the fit of
+/// [`Correlations::diffusion_from_msd`](crate::analysis::observable::Correlations::diffusion_from_msd),
+/// `D = b / 6`).
+fn msd_fit(t: &[(f64, f64)]) -> Option<(f64, f64)> {
+    let half = &t[t.len() / 2..];
+    if half.len() < 2 {
+        return None;
+    }
+    let n = half.len() as f64;
+    let mx = half.iter().map(|p| p.0).sum::<f64>() / n;
+    let my = half.iter().map(|p| p.1).sum::<f64>() / n;
+    let sxy: f64 = half.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    let sxx: f64 = half.iter().map(|p| (p.0 - mx).powi(2)).sum();
+    (sxx > 0.0).then(|| {
+        let b = sxy / sxx;
+        (my - b * mx, b)
+    })
+}
+
+/// Writes the observables' CSV files and, with `plots`, their SVG plots (axes in the units of
+/// `units`, captions and means from `info`); returns the names of the files written.
 pub(crate) fn write_observables(
     dir: &Path,
     obs: &mut Observers,
     plots: bool,
     units: &Units,
+    info: &PlotInfo,
 ) -> Result<Vec<String>, OutputError> {
     let mut files = Vec::new();
+    let au = axis_units(units);
+    let caption = info.caption(&au);
+    let plot = |title: &str, x: String, y: String, curves: Vec<Line>| Plot {
+        title: title.to_owned(),
+        caption: caption.clone(),
+        x_label: x,
+        y_label: y,
+        lines: curves,
+    };
     let mut table = |name: &str,
-                     header: &[&str],
+                     header: &[String],
                      rows: Vec<Vec<f64>>,
-                     plot: Option<(&str, &str, &str, Vec<Curve<'_>>)>|
+                     plot: Option<Plot>|
      -> Result<(), OutputError> {
         let csv = format!("{name}.csv");
-        write_csv(&dir.join(&csv), header, &rows)?;
+        let header: Vec<&str> = header.iter().map(String::as_str).collect();
+        write_csv(&dir.join(&csv), &header, &rows)?;
         files.push(csv);
-        if let (true, Some((title, xl, yl, curves))) = (plots, plot) {
+        if let (true, Some(p)) = (plots, plot) {
             let svg = format!("{name}.svg");
-            plot_svg(&dir.join(&svg), title, xl, yl, &curves)?;
-            files.push(svg);
+            write_plot(&dir.join(&svg), &p)?;
+            if dir.join(&svg).exists() {
+                files.push(svg);
+            }
         }
         Ok(())
     };
+    let strings = |h: &[&str]| -> Vec<String> { h.iter().map(|s| (*s).to_owned()).collect() };
     if let Some(rdf) = &obs.rdf {
         let t = rdf.table();
+        let partials = rdf.partials();
+        let name = |k: usize| {
+            info.species
+                .get(k)
+                .cloned()
+                .unwrap_or_else(|| format!("species{k}"))
+        };
+        let mut header = strings(&["r", "g"]);
+        let mut rows: Vec<Vec<f64>> = t.iter().map(|&(r, g)| vec![r, g]).collect();
+        let mut curves = vec![Line::new(
+            if partials.is_empty() {
+                String::new()
+            } else {
+                "g(r), all pairs".to_owned()
+            },
+            t,
+        )];
+        for p in partials {
+            header.push(format!("g_{}_{}", name(p.a), name(p.b)));
+            for (row, &(_, g)) in rows.iter_mut().zip(&p.rows) {
+                row.push(g);
+            }
+            curves.push(Line::new(format!("g {}–{}", name(p.a), name(p.b)), p.rows));
+        }
         table(
             "rdf",
-            &["r", "g"],
-            t.iter().map(|&(r, g)| vec![r, g]).collect(),
-            Some((
+            &header,
+            rows,
+            Some(plot(
                 "Radial distribution function",
-                "r",
-                "g(r)",
-                vec![Curve {
-                    label: "g(r)",
-                    points: t,
-                }],
+                format!("r ({})", au.length),
+                "g(r)".to_owned(),
+                curves,
             )),
         )?;
     }
     if let Some(c) = &obs.correlations {
         if c.wants_msd() {
             let t = c.msd_table();
+            let mut curves = vec![Line::new("⟨|r(t) − r(0)|²⟩", t.clone())];
+            if let Some((a, b)) = msd_fit(&t) {
+                let from = t[t.len() / 2].0;
+                let to = t.last().map_or(from, |p| p.0);
+                curves.push(Line {
+                    label: format!("fit 6Dt + c: D = {} {}", sig(b / 6.0), au.diffusion),
+                    points: vec![(from, a + b * from), (to, a + b * to)],
+                    dashed: true,
+                    mean: None,
+                });
+            }
             table(
                 "msd",
-                &["t", "msd"],
+                &strings(&["t", "msd"]),
                 t.iter().map(|&(x, y)| vec![x, y]).collect(),
-                Some((
+                Some(plot(
                     "Mean-square displacement",
-                    "t",
-                    "<|r(t) - r(0)|^2>",
-                    vec![Curve {
-                        label: "MSD",
-                        points: t,
-                    }],
+                    format!("t ({})", au.time),
+                    format!("MSD ({})", au.area),
+                    curves,
                 )),
             )?;
         }
@@ -193,16 +405,25 @@ pub(crate) fn write_observables(
             let c0 = t.first().map(|p| p.1).unwrap_or(1.0);
             table(
                 "vacf",
-                &["t", "vacf", "vacf_normalised"],
+                &strings(&["t", "vacf", "vacf_normalised"]),
                 t.iter().map(|&(x, y)| vec![x, y, y / c0]).collect(),
-                Some((
+                Some(plot(
                     "Velocity autocorrelation (normalised)",
-                    "t",
-                    "<v(0).v(t)> / <v^2>",
-                    vec![Curve {
-                        label: "VACF",
-                        points: t.iter().map(|&(x, y)| (x, y / c0)).collect(),
-                    }],
+                    format!("t ({})", au.time),
+                    "⟨v(0)·v(t)⟩ / ⟨v²⟩ (dimensionless)".to_owned(),
+                    vec![Line::new(
+                        match c.diffusion_from_vacf() {
+                            Some(d) => format!(
+                                "⟨v²⟩ = {} {}, Green–Kubo D = {} {}",
+                                sig(c0),
+                                au.speed_squared,
+                                sig(d),
+                                au.diffusion
+                            ),
+                            None => format!("⟨v²⟩ = {} {}", sig(c0), au.speed_squared),
+                        },
+                        t.iter().map(|&(x, y)| (x, y / c0)).collect(),
+                    )],
                 )),
             )?;
         }
@@ -210,21 +431,18 @@ pub(crate) fn write_observables(
             let t = c.oacf_table();
             table(
                 "oacf",
-                &["t", "s0_dot_st", "p2"],
+                &strings(&["t", "s0_dot_st", "p2"]),
                 t.iter().map(|&(x, a, b)| vec![x, a, b]).collect(),
-                Some((
+                Some(plot(
                     "Long-axis orientational autocorrelation",
-                    "t",
-                    "<s(0).s(t)>, <P2(s(0).s(t))>",
+                    format!("t ({})", au.time),
+                    "correlation (dimensionless)".to_owned(),
                     vec![
-                        Curve {
-                            label: "<s(0).s(t)>",
-                            points: t.iter().map(|&(x, a, _)| (x, a)).collect(),
-                        },
-                        Curve {
-                            label: "<P2>",
-                            points: t.iter().map(|&(x, _, b)| (x, b)).collect(),
-                        },
+                        Line::new("⟨s(0)·s(t)⟩", t.iter().map(|&(x, a, _)| (x, a)).collect()),
+                        Line::new(
+                            "⟨P₂(s(0)·s(t))⟩",
+                            t.iter().map(|&(x, _, b)| (x, b)).collect(),
+                        ),
                     ],
                 )),
             )?;
@@ -245,14 +463,14 @@ pub(crate) fn write_observables(
             .collect();
         table(
             "series",
-            &[
+            &strings(&[
                 "t",
                 "kinetic",
                 "potential",
                 "total",
                 "temperature",
                 "pressure",
-            ],
+            ]),
             rows.iter()
                 .map(|r| {
                     vec![
@@ -268,41 +486,36 @@ pub(crate) fn write_observables(
             None,
         )?;
         if plots {
-            let pts = |f: fn(&crate::analysis::observable::SeriesRow) -> f64| -> Vec<(f64, f64)> {
-                rows.iter().map(|r| (r.time, f(r))).collect()
-            };
-            plot_svg(
-                &dir.join("series-energy.svg"),
-                "Energy",
-                "t",
-                "energy",
-                &[
-                    Curve {
-                        label: "kinetic",
-                        points: pts(|r| r.kinetic),
-                    },
-                    Curve {
-                        label: "potential",
-                        points: pts(|r| r.potential),
-                    },
-                    Curve {
-                        label: "total",
-                        points: pts(|r| r.total),
-                    },
-                ],
-            )?;
-            plot_svg(
-                &dir.join("series-pressure.svg"),
-                "Pressure (averaged over each sampling interval)",
-                "t",
-                "P",
-                &[Curve {
-                    label: "pressure",
-                    points: pts(|r| r.pressure),
+            let x_label = format!("t ({})", au.time);
+            if let Some(p) = energy_plot(&rows, info, &au) {
+                let p = plot(p.0, x_label.clone(), p.1, p.2);
+                let path = dir.join("series-energy.svg");
+                write_plot(&path, &p)?;
+                if path.exists() {
+                    files.push("series-energy.svg".into());
+                }
+            }
+            let (mean, error) = info.pressure;
+            let p = plot(
+                "Pressure",
+                x_label,
+                format!("P ({})", au.pressure),
+                vec![Line {
+                    label: "P over each sampling interval".to_owned(),
+                    points: rows.iter().map(|r| (r.time, r.pressure)).collect(),
+                    dashed: false,
+                    mean: Some(Mean {
+                        label: mean_label(mean, error, au.pressure),
+                        value: mean,
+                        error,
+                    }),
                 }],
-            )?;
-            files.push("series-energy.svg".into());
-            files.push("series-pressure.svg".into());
+            );
+            let path = dir.join("series-pressure.svg");
+            write_plot(&path, &p)?;
+            if path.exists() {
+                files.push("series-pressure.svg".into());
+            }
         }
     }
     if let Some(t) = obs.trajectory.take() {
@@ -314,4 +527,100 @@ pub(crate) fn write_observables(
         files.push("trajectory.gsd".into());
     }
     Ok(files)
+}
+
+/// The energy plot of a series (rows in the scene's units): `K/N`, `U/N` and `E/N` with their
+/// production means and errors (`U/N`'s from `info`, the others block averages of the rows),
+/// as `(title, y label, curves)`. A run whose potential energy is zero at every sample has
+/// only `K/N` (then equal to `E/N`), and no plot at all when that is constant (hard spheres
+/// without a thermostat in production: a flat line).
+fn energy_plot(
+    rows: &[crate::analysis::observable::SeriesRow],
+    info: &PlotInfo,
+    au: &AxisUnits,
+) -> Option<(&'static str, String, Vec<Line>)> {
+    let n = info.n.max(1) as f64;
+    let column = |f: fn(&crate::analysis::observable::SeriesRow) -> f64| -> Vec<f64> {
+        rows.iter().map(|r| f(r) / n).collect()
+    };
+    let curve = |label: &str, values: Vec<f64>, mean: Option<(f64, Option<f64>)>| Line {
+        label: label.to_owned(),
+        points: rows.iter().map(|r| r.time).zip(values).collect(),
+        dashed: false,
+        mean: mean.map(|(value, error)| Mean {
+            label: mean_label(value, error, au.energy),
+            value,
+            error,
+        }),
+    };
+    let kinetic = column(|r| r.kinetic);
+    let no_potential = rows.iter().all(|r| r.potential == 0.0);
+    if no_potential {
+        let (lo, hi) = kinetic
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+                (a.min(x), b.max(x))
+            });
+        let spread = hi - lo;
+        if spread.is_nan() || spread <= 1e-9 * hi.abs().max(lo.abs()) {
+            return None;
+        }
+        let mean = block_mean(&kinetic);
+        return Some((
+            "Kinetic energy per body (no potential energy)",
+            format!("K/N ({})", au.energy),
+            vec![curve("K/N", kinetic, mean)],
+        ));
+    }
+    let potential = column(|r| r.potential);
+    let total = column(|r| r.total);
+    let (km, tm) = (block_mean(&kinetic), block_mean(&total));
+    Some((
+        "Energy per body",
+        format!("energy per body ({})", au.energy),
+        vec![
+            curve("K/N", kinetic, km),
+            curve("U/N", potential, Some(info.potential_per_body)),
+            curve("E/N", total, tm),
+        ],
+    ))
+}
+
+#[cfg(test)]
+mod plot_tests {
+    use super::*;
+
+    #[test]
+    fn captions_and_legends_round_their_numbers() {
+        assert_eq!(sig(530.539), "530.5");
+        assert_eq!(sig(0.017_885_380_6), "0.01789");
+        assert_eq!(sig(0.99999), "1.000");
+        assert_eq!(sig(1312.07), "1312");
+        assert_eq!(mean_label(1179.3, Some(25.4), "bar"), "mean 1179 ± 25 bar");
+        assert_eq!(
+            mean_label(10.4771, Some(0.01432), "kJ/mol"),
+            "mean 10.477 ± 0.014 kJ/mol"
+        );
+        assert_eq!(
+            mean_label(4.458, Some(2.8e-15), "kJ/mol"),
+            "mean 4.458 ± 2.8e-15 kJ/mol"
+        );
+        assert_eq!(mean_label(8.7812, None, "ε/σ³"), "mean 8.781 ε/σ³");
+    }
+
+    #[test]
+    fn the_msd_fit_recovers_the_slope_of_the_straight_tail() {
+        // MSD = 6 D t + c with D = 0.25 beyond a ballistic start.
+        let t: Vec<(f64, f64)> = (0..40)
+            .map(|k| {
+                let t = 0.1 * k as f64;
+                (t, if t < 1.0 { 3.0 * t * t } else { 1.5 * t + 1.5 })
+            })
+            .collect();
+        let (a, b) = msd_fit(&t).unwrap();
+        assert!(
+            (b / 6.0 - 0.25).abs() < 1e-12 && (a - 1.5).abs() < 1e-12,
+            "{a} {b}"
+        );
+    }
 }

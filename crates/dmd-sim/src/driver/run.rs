@@ -32,7 +32,7 @@ use crate::driver::checkpoint::{
     SceneSource, Stage,
 };
 use crate::driver::hmc::{Acceptance, Chain, Ensemble, HmcSettings, HmcSummary};
-use crate::driver::reporting::write_observables;
+use crate::driver::reporting::{PlotInfo, terrace_step, write_observables};
 pub use crate::driver::reporting::{
     PhaseEnd, Quiet, Reporter, RunError, RunPlan, thread_cpu_seconds, unit_names,
 };
@@ -1031,7 +1031,20 @@ impl Context<'_> {
             rattle: crate::models::flexible::FlexStats::from_report(&sim.model().report()),
         };
         if let Some(dir) = out {
-            summary.files = write_observables(dir, &mut observers, o.plots, &self.units)?;
+            let info = PlotInfo {
+                scene: scene_name(self.options),
+                n: summary.n_bodies,
+                temperature: summary.temperature,
+                density: summary.density,
+                terrace_step: terrace_step(self.scene, &self.units),
+                species: self.scene.species.iter().map(|s| s.name.clone()).collect(),
+                pressure: (summary.pressure, summary.pressure_error),
+                potential_per_body: (
+                    summary.potential_energy_per_body,
+                    summary.potential_energy_per_body_error,
+                ),
+            };
+            summary.files = write_observables(dir, &mut observers, o.plots, &self.units, &info)?;
             if let Some(series) = run.chain.as_ref().and_then(|c| c.series.as_ref()) {
                 write_hmc_series(&dir.join("hmc.csv"), series, &self.units)?;
                 summary.files.push("hmc.csv".to_owned());
@@ -1051,6 +1064,18 @@ impl Summary {
             .or(self.events_per_time_unit)
             .unwrap_or(f64::NAN)
     }
+}
+
+/// The stem of the scene file a run was read from (`rods-paper`), when the options say.
+fn scene_name(options: &RunOptions) -> Option<String> {
+    let file = match (&options.source, &options.resume) {
+        (Some(s), _) => &s.file,
+        (None, Some((_, c))) => &c.source.file,
+        (None, None) => return None,
+    };
+    file.file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .filter(|s| !s.is_empty())
 }
 
 // ----- Checkpoints and HMC segments (issue 9) ---------------------------------------------------

@@ -194,6 +194,21 @@ pub fn run_with(
     out: Option<&Path>,
     reporter: &mut dyn Reporter,
 ) -> Result<SmdSummary, RunError> {
+    run_named(scene, base, out, reporter, None)
+}
+
+/// [`run_with`] for a scene called `name` (its file's stem), which the captions of the plots
+/// name.
+///
+/// # Errors
+/// As [`run`].
+pub fn run_named(
+    scene: &Scene,
+    base: &Path,
+    out: Option<&Path>,
+    reporter: &mut dyn Reporter,
+    name: Option<&str>,
+) -> Result<SmdSummary, RunError> {
     let units = Units::of(scene.units);
     let ignored = ignored_keys(scene);
     let scene = &scene.internal();
@@ -336,6 +351,7 @@ pub fn run_with(
         ignored,
         notes,
         reporter,
+        name: name.map(str::to_owned),
     };
     let pot_err = |e: potential::PotentialError| -> RunError {
         SceneError::invalid("pair[0].potential", e.to_string()).into()
@@ -387,6 +403,8 @@ struct Job<'a> {
     ignored: Vec<String>,
     notes: Vec<String>,
     reporter: &'a mut dyn Reporter,
+    /// The scene's name, for the plots' captions.
+    name: Option<String>,
 }
 
 /// Progress reports per phase (and equilibration chunks).
@@ -707,11 +725,25 @@ impl Job<'_> {
             files: Vec::new(),
         };
         if let Some(dir) = self.out {
+            let info = crate::driver::reporting::PlotInfo {
+                scene: self.name.clone(),
+                n: summary.n_bodies,
+                temperature: summary.temperature,
+                density: summary.density,
+                terrace_step: None,
+                species: scene.species.iter().map(|s| s.name.clone()).collect(),
+                pressure: (summary.pressure, Some(summary.pressure_error)),
+                potential_per_body: (
+                    summary.potential_energy_per_body,
+                    Some(summary.potential_energy_per_body_error),
+                ),
+            };
             summary.files = crate::driver::reporting::write_observables(
                 dir,
                 &mut observers,
                 o.plots,
                 &self.units,
+                &info,
             )?;
             let json = serde_json::to_string_pretty(&summary).expect("a summary serialises");
             write_atomically(&dir.join("summary.json"), json.as_bytes())?;

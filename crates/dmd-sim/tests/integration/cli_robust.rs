@@ -147,15 +147,16 @@ fn a_new_run_does_not_mix_its_files_with_another_runs() {
     }
     std::fs::write(out.join("notes.txt"), "mine").unwrap();
     let summary = std::fs::read(out.join("summary.json")).unwrap();
-    // A second run into the same folder is refused and changes nothing.
+    // A second run into the same folder is refused and changes nothing. (Hard spheres in NVE
+    // write no energy plot: it would be a flat line.)
     let second = scene(&d, "");
     let o = dmd(&["run", "--quiet"], &[("", &second), ("--out", &out)]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(
         stderr(&o).starts_with(&format!(
-            "dmd: --out {}: holds the files of another run (checkpoint.dmd, series-energy.svg, \
-             series-pressure.svg, series.csv, and 2 more): use --force to replace them, \
-             or `dmd resume` to continue that run",
+            "dmd: --out {}: holds the files of another run (checkpoint.dmd, \
+             series-pressure.svg, series.csv, summary.json, and 1 more): use --force to \
+             replace them, or `dmd resume` to continue that run",
             out.display()
         )),
         "{}",

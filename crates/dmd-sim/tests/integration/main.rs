@@ -11,6 +11,7 @@ mod gsd_output;
 mod hmc;
 mod layers;
 mod physics;
+mod plots;
 mod reference;
 mod rods;
 mod rods_scenes;
