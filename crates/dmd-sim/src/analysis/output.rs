@@ -20,13 +20,14 @@ pub const SERIES_ROW_BYTES: f64 = 150.0;
 pub const LAG_BYTES: f64 = 40.0;
 
 /// Bytes of one line of a `trajectory.xyz` frame: species name, position and velocity with
-/// ten decimals and the id; a body with an attitude adds a quaternion with twelve and the
-/// shape, an atom of a semi-flexible molecule its molecule's id.
+/// ten decimals, image, element, mass, momentum in eleven digits and the id; a body with an
+/// attitude adds a quaternion with twelve decimals, the shape and the angular velocity, an atom
+/// of a semi-flexible molecule its molecule's id.
 pub fn trajectory_line_bytes(oriented: bool, atom: bool) -> f64 {
     match (oriented, atom) {
-        (true, _) => 190.0,
-        (false, true) => 120.0,
-        (false, false) => 110.0,
+        (true, _) => 300.0,
+        (false, true) => 190.0,
+        (false, false) => 180.0,
     }
 }
 

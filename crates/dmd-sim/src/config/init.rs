@@ -142,6 +142,17 @@ pub fn lattice(scene: &Scene, smallest_core: f64) -> Result<Configuration, Scene
     })
 }
 
+/// How errors name a start file: as the scene gives it (`init.file`), else its path.
+fn shown(scene: &Scene, path: &Path) -> String {
+    scene
+        .init
+        .file
+        .as_ref()
+        .map_or(path, |f| f.as_path())
+        .display()
+        .to_string()
+}
+
 /// One frame of an XYZ file: its comment line and its rows, split into words, each with its
 /// line number in the file (from 1), in body order: by the `id:I:1` column when the frame has
 /// one (`dmd` writes it), else as they stand.
@@ -280,7 +291,8 @@ fn numbers(frame: &XyzFrame<'_>, at: usize, width: usize) -> Result<Vec<Vec<f64>
 /// [`SceneError::Invalid`] naming `init.file` for unreadable or inconsistent files.
 pub fn read_xyz(scene: &Scene, path: &Path) -> Result<Configuration, SceneError> {
     let key = "init.file";
-    let err = |msg: String| SceneError::invalid(key, format!("{}: {msg}", path.display()));
+    let name = shown(scene, path);
+    let err = |msg: String| SceneError::invalid(key, format!("{name}: {msg}"));
     let text = std::fs::read_to_string(path).map_err(|e| err(e.to_string()))?;
     let count = scene.n_bodies() as usize;
     let frame = xyz_frame(&text, scene.init.frame.unwrap_or(0), count).map_err(&err)?;
@@ -335,21 +347,22 @@ pub fn read_xyz(scene: &Scene, path: &Path) -> Result<Configuration, SceneError>
     })
 }
 
-/// Reads the attitudes of `n` bodies from frame `frame` of an extended XYZ file (as
+/// Reads the attitudes of `n` bodies from the frame `init.frame` of an extended XYZ file (as
 /// [`read_xyz`] picks it): the `orientation:R:4` column of its `Properties` (unit quaternions
 /// with the scalar last, as `dmd` writes them), normalised. Errors name `key`.
 ///
 /// # Errors
 /// [`SceneError::Invalid`] naming `key` for a file without the column or with bad numbers.
 pub fn read_attitudes(
+    scene: &Scene,
     path: &Path,
-    frame: i64,
     n: usize,
     key: &str,
 ) -> Result<Vec<glam::DQuat>, SceneError> {
-    let err = |msg: String| SceneError::invalid(key, format!("{}: {msg}", path.display()));
+    let name = shown(scene, path);
+    let err = |msg: String| SceneError::invalid(key, format!("{name}: {msg}"));
     let text = std::fs::read_to_string(path).map_err(|e| err(e.to_string()))?;
-    let frame = xyz_frame(&text, frame, n).map_err(&err)?;
+    let frame = xyz_frame(&text, scene.init.frame.unwrap_or(0), n).map_err(&err)?;
     if !frame.comment.contains("Properties=") {
         return Err(err(
             "no Properties=… in the comment line, so no orientation column".into(),
@@ -396,7 +409,7 @@ pub fn read_attitudes(
 /// [`SceneError::Invalid`] naming `init.orientations` for a file without the column or with
 /// bad numbers.
 pub fn read_orientations(scene: &Scene, path: &Path, n: usize) -> Result<Vec<DVec3>, SceneError> {
-    let q = read_attitudes(path, scene.init.frame.unwrap_or(0), n, "init.orientations")?;
+    let q = read_attitudes(scene, path, n, "init.orientations")?;
     Ok(q.into_iter().map(|q| q * DVec3::Z).collect())
 }
 
@@ -423,7 +436,8 @@ pub fn read_motion(
     rotating: bool,
 ) -> Result<FileMotion, SceneError> {
     let key = "init.velocities";
-    let err = |msg: String| SceneError::invalid(key, format!("{}: {msg}", path.display()));
+    let name = shown(scene, path);
+    let err = |msg: String| SceneError::invalid(key, format!("{name}: {msg}"));
     let text = std::fs::read_to_string(path).map_err(|e| err(e.to_string()))?;
     let n = masses.len();
     let frame = xyz_frame(&text, scene.init.frame.unwrap_or(0), n).map_err(&err)?;
@@ -450,8 +464,8 @@ pub fn read_motion(
         for ((m, x), (line, words)) in masses.iter().zip(&file).zip(&frame.rows) {
             if (x[0] - m).abs() > 1e-9 * m.abs() {
                 return Err(err(format!(
-                    "line {line}: a body of mass {} in the file is a `{}` of mass {m} in the \
-                     scene: the velocities belong to other bodies",
+                    "line {line}: mass {} in the file, {m} for species `{}` in the scene: the \
+                     velocities belong to other bodies",
                     x[0],
                     words.first().unwrap_or(&"")
                 )));

@@ -418,8 +418,7 @@ pub fn run_scene_with(
             let start = match omegas {
                 Some(w) => {
                     let file = base.join(scene.init.file.as_ref().expect("checked"));
-                    let frame = scene.init.frame.unwrap_or(0);
-                    Some((read_attitudes(&file, frame, n, "init.velocities")?, w))
+                    Some((read_attitudes(scene, &file, n, "init.velocities")?, w))
                 }
                 None => None,
             };

@@ -283,10 +283,7 @@ pub fn run_with(
         let inertia = TopInertia::new(DVec3::from(moments))
             .map_err(|e| SceneError::invalid("species.moments", e))?;
         let (poses, omegas) = match file_omegas {
-            Some(w) => {
-                let frame = scene.init.frame.unwrap_or(0);
-                (read_attitudes(&start_file, frame, n, "init.velocities")?, w)
-            }
+            Some(w) => (read_attitudes(scene, &start_file, n, "init.velocities")?, w),
             None => tops_start(scene, &[inertia], &vec![0; n]),
         };
         let principal = inertia.principal();
