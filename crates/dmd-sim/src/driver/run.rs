@@ -42,6 +42,7 @@ use crate::engine::model::{HardSpheres, PairModel, Stepped};
 use crate::engine::schedule::Scheduler;
 use crate::engine::simulation::MAX_REBASE_EVENTS;
 use crate::engine::simulation::{Andersen, LoopSettings, Progress, SetupError, Simulation, Stop};
+use crate::models::rotor::TopInertia;
 use crate::models::search::SearchStats;
 use crate::models::terraced::{PairTable, Terraced};
 
@@ -459,13 +460,16 @@ fn layout_of(scene: &Scene, plan: &Plan, units: &Units) -> Layout {
             .find_map(|p| p.potential.as_ref().and_then(rod_semi_axes))
             .unwrap_or([0.5; 3])
     };
+    // A rod's moments, or a top's as its model takes them (a rounded planar body made planar).
     let rotor_moments = || -> Vec<[f64; 3]> {
         scene
             .species
             .iter()
             .map(|s| match (s.inertia, s.moments) {
                 (Some(i), _) => [i, i, 0.0],
-                (None, Some(m)) => m,
+                (None, Some(m)) => {
+                    TopInertia::new(DVec3::from(m)).map_or(m, |t| t.principal().to_array())
+                }
                 (None, None) => [0.0; 3],
             })
             .collect()

@@ -551,7 +551,10 @@ impl Job<'_> {
             let (drawing, moments) = match md.system().body() {
                 BodyModel::Rigid { .. } => {
                     let (centres, diameters) = crate::config::rods::water_drawing();
-                    let moments = sp.moments.unwrap_or([0.0; 3]);
+                    // As the model takes them (a rounded planar body made planar).
+                    let moments = sp.moments.map_or([0.0; 3], |m| {
+                        TopInertia::new(DVec3::from(m)).map_or(m, |t| t.principal().to_array())
+                    });
                     (Drawing::Sites { centres, diameters }, vec![moments])
                 }
                 _ if sp.inertia.is_some() => {
