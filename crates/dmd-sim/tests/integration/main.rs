@@ -21,4 +21,5 @@ mod smd_engine;
 mod smooth;
 mod support;
 mod tops;
+mod trajectory_tools;
 mod water_smd;
