@@ -195,7 +195,7 @@ pub enum Drawing {
         /// Diameter (length).
         diameter: f64,
     },
-    /// A rod: an ellipsoid along its body z axis ([`rod_semi_axes`]).
+    /// A rod: an ellipsoid along its body z axis.
     Rod {
         /// Semi-axes (length), the third along the rod.
         semi_axes: [f64; 3],
@@ -241,27 +241,6 @@ impl Drawing {
     }
 }
 
-/// The ellipsoid a rod is drawn as, from its self-pair potential: semi-axes `(a, a, c)`, `c`
-/// along the rod (length).
-///
-/// - The modified Lennard-Jones rods (`rods`, `U = 0` at `r + ζ(½ − c²) = σ`): width
-///   `σ − ζ/2`, where two parallel rods' potential vanishes, and length `σ + ζ/2`, where two
-///   perpendicular rods' does.
-/// - Gay–Berne: breadth `σ₀` and length `κ σ₀`.
-pub fn rod_semi_axes(potential: &crate::config::scene::PotentialSpec) -> Option<[f64; 3]> {
-    use crate::config::scene::PotentialSpec;
-    match *potential {
-        PotentialSpec::Rods { sigma, zeta, .. } => {
-            let a = 0.5 * (sigma - 0.5 * zeta);
-            Some([a, a, 0.5 * (sigma + 0.5 * zeta)])
-        }
-        PotentialSpec::GayBerne { sigma0, kappa, .. } => {
-            Some([0.5 * sigma0, 0.5 * sigma0, 0.5 * kappa * sigma0])
-        }
-        PotentialSpec::LennardJones { .. } | PotentialSpec::SsdE { .. } => None,
-    }
-}
-
 /// The chemical symbols by atomic number (`X`, 0, for none).
 const ELEMENTS: [&str; 119] = [
     "X", "H", "He", "Li", "Be", "B", "C", "N", "O", "F", "Ne", "Na", "Mg", "Al", "Si", "P", "S",
@@ -293,16 +272,6 @@ pub fn element_of(name: &str, element: Option<&str>) -> u8 {
 /// (CODATA 2018: e = 1.602176634·10⁻¹⁹ J, amu = 1.66053906660·10⁻²⁷ kg).
 pub const ASE_VELOCITY_IN_A_PER_PS: f64 = 98.226_947_502_532_77;
 
-/// The `momenta` column per internal momentum `m v` in a scene of unit `system`: in molecular
-/// units, where masses are amu and velocities Å/ps, `1 / ASE_VELOCITY_IN_A_PER_PS` (ASE's unit
-/// amu·√(eV/amu)); 1 in reduced units, which ASE has no counterpart of.
-pub fn ase_momentum_unit(system: crate::config::scene::UnitSystem) -> f64 {
-    match system {
-        crate::config::scene::UnitSystem::Reduced => 1.0,
-        crate::config::scene::UnitSystem::Molecular => 1.0 / ASE_VELOCITY_IN_A_PER_PS,
-    }
-}
-
 /// What the trajectory writers know of a scene's bodies: names, drawings, elements and moments
 /// of inertia per species, and the unit of the `momenta` column.
 #[derive(Clone, Debug, PartialEq)]
@@ -322,7 +291,7 @@ pub struct Layout {
     pub moments: Vec<[f64; 3]>,
     /// The `momenta` column per internal momentum `m v`: 1 in reduced units, and in molecular
     /// units `1 / ASE_VELOCITY_IN_A_PER_PS`, so that the column is in ASE's units
-    /// (amu·√(eV/amu)).
+    /// (amu·√(eV/amu)) and ASE's velocities in its own.
     pub momentum_unit: f64,
 }
 
@@ -949,6 +918,52 @@ mod tests {
         // Short: 0.1 is written as 1e-1, not 1.0000000000e-1.
         assert_eq!(text.lines().nth(1), Some("1e-1"));
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn elements_by_symbol_name_or_none() {
+        assert_eq!(atomic_number("O"), Some(8));
+        assert_eq!(atomic_number("Og"), Some(118));
+        assert_eq!(atomic_number("X"), Some(0));
+        assert_eq!(atomic_number("o"), None);
+        assert_eq!(element_of("Ar", None), 18);
+        assert_eq!(element_of("rod", None), 0);
+        assert_eq!(element_of("water", Some("O")), 8);
+        assert_eq!(element_of("S", Some("X")), 0);
+    }
+
+    #[test]
+    fn images_restore_the_unwrapped_position() {
+        let l = DVec3::new(2.0, 3.0, 5.0);
+        for u in [
+            DVec3::new(-0.5, 7.25, 4.999),
+            DVec3::new(2.0, -3.0, 0.0),
+            DVec3::new(-1e-17, 1e6 + 0.1, -12.5),
+        ] {
+            let (p, n) = wrap_with_image(u, l);
+            for k in 0..3 {
+                assert!((0.0..l[k]).contains(&p[k]), "{u} → {p}");
+                let back = p[k] + n[k] as f64 * l[k];
+                assert!(
+                    (back - u[k]).abs() <= 1e-9 * (1.0 + u[k].abs()),
+                    "{u} → {p}, {n:?}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn angular_velocity_from_momentum_and_moments() {
+        // A rod along x (body z turned onto x) spinning about lab z: ω = L / I.
+        let q = axis_quaternion(DVec3::X);
+        let w = angular_velocity(q, DVec3::new(0.0, 0.0, 2.0), [0.5, 0.5, 0.0]);
+        assert!((w - DVec3::new(0.0, 0.0, 4.0)).length() < 1e-12, "{w}");
+        // An asymmetric top: ω_body = L_body / I component by component.
+        let q = DQuat::from_euler(glam::EulerRot::ZYX, 0.3, -1.1, 2.0);
+        let wb = DVec3::new(0.7, -1.3, 2.2);
+        let i = [1.0, 2.0, 3.0];
+        let l = q * (DVec3::from(i) * wb);
+        assert!((angular_velocity(q, l, i) - q * wb).length() < 1e-12);
     }
 
     #[test]

@@ -7,7 +7,8 @@ use rand::{RngExt, SeedableRng};
 use rand_distr::{Distribution, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;
 
-use crate::config::scene::{Positions, Scene, SceneError};
+use crate::analysis::output::ASE_VELOCITY_IN_A_PER_PS;
+use crate::config::scene::{Positions, PotentialSpec, Scene, SceneError, UnitSystem};
 
 /// Positions, species and box of the initial configuration.
 #[derive(Clone, Debug, PartialEq)]
@@ -539,6 +540,38 @@ pub fn maxwell_boltzmann(masses: &[f64], temperature: f64, seed: u64) -> Vec<DVe
         }
     }
     v
+}
+
+// ----- What trajectories take from a scene -----------------------------------------------------
+
+/// The ellipsoid a rod is drawn as, from its self-pair potential: semi-axes `(a, a, c)`, `c`
+/// along the rod (length).
+///
+/// - The modified Lennard-Jones rods (`rods`, `U = 0` at `r + ζ(½ − c²) = σ`): width
+///   `σ − ζ/2`, where two parallel rods' potential vanishes, and length `σ + ζ/2`, where two
+///   perpendicular rods' does.
+/// - Gay–Berne: breadth `σ₀` and length `κ σ₀`.
+pub fn rod_semi_axes(potential: &PotentialSpec) -> Option<[f64; 3]> {
+    match *potential {
+        PotentialSpec::Rods { sigma, zeta, .. } => {
+            let a = 0.5 * (sigma - 0.5 * zeta);
+            Some([a, a, 0.5 * (sigma + 0.5 * zeta)])
+        }
+        PotentialSpec::GayBerne { sigma0, kappa, .. } => {
+            Some([0.5 * sigma0, 0.5 * sigma0, 0.5 * kappa * sigma0])
+        }
+        PotentialSpec::LennardJones { .. } | PotentialSpec::SsdE { .. } => None,
+    }
+}
+
+/// The `momenta` column per internal momentum `m v` in a scene of unit `system`: in molecular
+/// units, where masses are amu and velocities Å/ps, `1 / `[`ASE_VELOCITY_IN_A_PER_PS`] (ASE's unit
+/// amu·√(eV/amu)); 1 in reduced units, which ASE has no counterpart of.
+pub fn ase_momentum_unit(system: UnitSystem) -> f64 {
+    match system {
+        UnitSystem::Reduced => 1.0,
+        UnitSystem::Molecular => 1.0 / ASE_VELOCITY_IN_A_PER_PS,
+    }
 }
 
 #[cfg(test)]

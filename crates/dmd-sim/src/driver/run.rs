@@ -16,12 +16,12 @@ use serde::Serialize;
 
 use crate::analysis::observable::{Correlations, Observers, Rdf, Series};
 use crate::analysis::output::{
-    Drawing, GsdTrajectory, Layout, OutputError, Trajectory, ase_momentum_unit, element_of,
-    rod_semi_axes, write_atomically, write_csv,
+    Drawing, GsdTrajectory, Layout, OutputError, Trajectory, element_of, write_atomically,
+    write_csv,
 };
 use crate::config::init::{
-    Configuration, lattice, maxwell_boltzmann, read_attitudes, read_motion, read_orientations,
-    read_xyz,
+    Configuration, ase_momentum_unit, lattice, maxwell_boltzmann, read_attitudes, read_motion,
+    read_orientations, read_xyz, rod_semi_axes,
 };
 use crate::config::rods::{
     Plan, equipartitioned_omegas, random_axes, rod_species, search_settings,

@@ -39,12 +39,11 @@ use smd::{
 
 use crate::analysis::observable::{Correlations, Observers, Rdf, Series};
 use crate::analysis::output::{
-    Drawing, Layout, OutputError, Trajectory, ase_momentum_unit, axis_quaternion, element_of,
-    rod_semi_axes, write_atomically,
+    Drawing, Layout, OutputError, Trajectory, axis_quaternion, element_of, write_atomically,
 };
 use crate::config::init::{
-    Configuration, lattice, maxwell_boltzmann, read_attitudes, read_motion, read_orientations,
-    read_xyz,
+    Configuration, ase_momentum_unit, lattice, maxwell_boltzmann, read_attitudes, read_motion,
+    read_orientations, read_xyz, rod_semi_axes,
 };
 use crate::config::rods::{equipartitioned_omegas, random_axes, ssd_e, tops_start};
 pub use crate::config::scene::{Engine, SmdSpec, SmoothingSpec};
