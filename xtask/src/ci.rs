@@ -34,10 +34,11 @@ pub(crate) const STEPS: &[Step] = &[
         "cargo clippy --workspace --all-targets -- -D warnings",
         &[],
     ),
-    // The gsd crate's tests exchange files with the reference Python package.
+    // The gsd crate's tests exchange files with the reference Python package; dmd-sim's
+    // check that ASE reads its trajectories.
     (
         "python packages",
-        "python3 -m pip install --quiet --disable-pip-version-check gsd numpy",
+        "python3 -m pip install --quiet --disable-pip-version-check ase gsd numpy",
         &[],
     ),
     ("tests", TEST_COMMAND, &[]),

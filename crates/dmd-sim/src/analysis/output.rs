@@ -20,13 +20,14 @@ pub const SERIES_ROW_BYTES: f64 = 150.0;
 pub const LAG_BYTES: f64 = 40.0;
 
 /// Bytes of one line of a `trajectory.xyz` frame: species name, position and velocity with
-/// ten decimals and the id; a body with an attitude adds a quaternion with twelve and the
-/// shape, an atom of a semi-flexible molecule its molecule's id.
+/// ten decimals, image, element, mass, momentum in eleven digits and the id; a body with an
+/// attitude adds a quaternion with twelve decimals, the shape and the angular velocity, an atom
+/// of a semi-flexible molecule its molecule's id.
 pub fn trajectory_line_bytes(oriented: bool, atom: bool) -> f64 {
     match (oriented, atom) {
-        (true, _) => 190.0,
-        (false, true) => 120.0,
-        (false, false) => 110.0,
+        (true, _) => 300.0,
+        (false, true) => 190.0,
+        (false, false) => 180.0,
     }
 }
 
@@ -474,9 +475,11 @@ pub enum Drawing {
         /// Diameter (length).
         diameter: f64,
     },
-    /// A rod: an ellipsoid along its body z axis ([`Trajectory::with_shape`], by default
-    /// semi-axes 0.5, 0.5 and 1.5 length units).
-    Rod,
+    /// A rod: an ellipsoid along its body z axis.
+    Rod {
+        /// Semi-axes (length), the third along the rod.
+        semi_axes: [f64; 3],
+    },
     /// A rigid site molecule: its sites in its body (principal) frame, relative to its centre
     /// (length), and their diameters (length).
     Sites {
@@ -486,20 +489,24 @@ pub enum Drawing {
         diameters: Vec<f64>,
     },
     /// A semi-flexible molecule, drawn as its atoms: the site kind of each atom, an index into
-    /// [`Layout::kinds`].
+    /// [`Layout::kinds`], and its mass.
     Atoms {
         /// Site kind of each atom.
         kinds: Vec<u32>,
+        /// Mass of each atom.
+        masses: Vec<f64>,
     },
 }
 
 impl Drawing {
     /// The semi-axes (length) of the ellipsoid an extended XYZ frame draws a body with an
-    /// attitude as: for site molecules the extent of the sites along each body axis.
-    fn semi_axes(&self, rod: [f64; 3]) -> [f64; 3] {
+    /// attitude as: for site molecules the extent of the sites along each body axis (`None`
+    /// for semi-flexible molecules, written as their atoms).
+    fn semi_axes(&self) -> Option<[f64; 3]> {
         match self {
-            Drawing::Sphere { diameter } => [0.5 * diameter; 3],
-            Drawing::Rod | Drawing::Atoms { .. } => rod,
+            Drawing::Sphere { diameter } => Some([0.5 * diameter; 3]),
+            Drawing::Rod { semi_axes } => Some(*semi_axes),
+            Drawing::Atoms { .. } => None,
             Drawing::Sites { centres, diameters } => {
                 let mut e = [0.0f64; 3];
                 for (c, d) in centres.iter().zip(diameters) {
@@ -508,14 +515,46 @@ impl Drawing {
                     }
                 }
                 // Six decimals: a drawing's size, not a measurement.
-                e.map(|x| (x * 1e6).round() / 1e6)
+                Some(e.map(|x| (x * 1e6).round() / 1e6))
             }
         }
     }
 }
 
-/// What the trajectory writers know of a scene's bodies: names and drawings per species.
-#[derive(Clone, Debug, Default, PartialEq)]
+/// The chemical symbols by atomic number (`X`, 0, for none).
+const ELEMENTS: [&str; 119] = [
+    "X", "H", "He", "Li", "Be", "B", "C", "N", "O", "F", "Ne", "Na", "Mg", "Al", "Si", "P", "S",
+    "Cl", "Ar", "K", "Ca", "Sc", "Ti", "V", "Cr", "Mn", "Fe", "Co", "Ni", "Cu", "Zn", "Ga", "Ge",
+    "As", "Se", "Br", "Kr", "Rb", "Sr", "Y", "Zr", "Nb", "Mo", "Tc", "Ru", "Rh", "Pd", "Ag", "Cd",
+    "In", "Sn", "Sb", "Te", "I", "Xe", "Cs", "Ba", "La", "Ce", "Pr", "Nd", "Pm", "Sm", "Eu", "Gd",
+    "Tb", "Dy", "Ho", "Er", "Tm", "Yb", "Lu", "Hf", "Ta", "W", "Re", "Os", "Ir", "Pt", "Au", "Hg",
+    "Tl", "Pb", "Bi", "Po", "At", "Rn", "Fr", "Ra", "Ac", "Th", "Pa", "U", "Np", "Pu", "Am", "Cm",
+    "Bk", "Cf", "Es", "Fm", "Md", "No", "Lr", "Rf", "Db", "Sg", "Bh", "Hs", "Mt", "Ds", "Rg", "Cn",
+    "Nh", "Fl", "Mc", "Lv", "Ts", "Og",
+];
+
+/// The atomic number of a chemical symbol written as the periodic table writes it (`O`, `Ar`;
+/// `X` is 0, no element); `None` for anything else.
+pub fn atomic_number(symbol: &str) -> Option<u8> {
+    ELEMENTS.iter().position(|&e| e == symbol).map(|z| z as u8)
+}
+
+/// The atomic number a species or site kind is written with: its `element`, else its name when
+/// the name is a chemical symbol, else 0 (`X`).
+pub fn element_of(name: &str, element: Option<&str>) -> u8 {
+    element
+        .and_then(atomic_number)
+        .or_else(|| atomic_number(name))
+        .unwrap_or(0)
+}
+
+/// ASE's unit of velocity, `Å / (Å·√(amu/eV))`, in Å/ps: `√(eV/amu) · 1 ps / 1 Å`
+/// (CODATA 2018: e = 1.602176634·10⁻¹⁹ J, amu = 1.66053906660·10⁻²⁷ kg).
+pub const ASE_VELOCITY_IN_A_PER_PS: f64 = 98.226_947_502_532_77;
+
+/// What the trajectory writers know of a scene's bodies: names, drawings, elements and moments
+/// of inertia per species, and the unit of the `momenta` column.
+#[derive(Clone, Debug, PartialEq)]
 pub struct Layout {
     /// Species names.
     pub species: Vec<String>,
@@ -523,9 +562,34 @@ pub struct Layout {
     pub drawings: Vec<Drawing>,
     /// Site kinds of semi-flexible molecules: name and diameter (length).
     pub kinds: Vec<(String, f64)>,
+    /// The atomic number of each species ([`element_of`]), the `Z` column.
+    pub elements: Vec<u8>,
+    /// The atomic number of each site kind of semi-flexible molecules.
+    pub kind_elements: Vec<u8>,
+    /// The principal moments of inertia of each species about its body axes (mass·length²;
+    /// a rod's `(I, I, 0)`), for the `omega` column; empty when the bodies do not rotate.
+    pub moments: Vec<[f64; 3]>,
+    /// The `momenta` column per internal momentum `m v`: 1 in reduced units, and in molecular
+    /// units `1 / ASE_VELOCITY_IN_A_PER_PS`, so that the column is in ASE's units
+    /// (amu·√(eV/amu)) and ASE's velocities in its own.
+    pub momentum_unit: f64,
 }
 
 impl Layout {
+    /// A layout of species `names` drawn as `drawings`, elements from the names, no site
+    /// kinds, no rotation, momenta in the run's units.
+    pub fn new(species: Vec<String>, drawings: Vec<Drawing>) -> Self {
+        Layout {
+            elements: species.iter().map(|n| element_of(n, None)).collect(),
+            species,
+            drawings,
+            kinds: Vec::new(),
+            kind_elements: Vec::new(),
+            moments: Vec::new(),
+            momentum_unit: 1.0,
+        }
+    }
+
     /// Whether the frames hold atoms (semi-flexible molecules) instead of bodies.
     pub fn atoms(&self) -> bool {
         self.drawings
@@ -541,27 +605,71 @@ fn missing_atoms(i: usize, now: f64) -> std::io::Error {
     ))
 }
 
-/// An extended XYZ trajectory (readable by OVITO): per frame the line count, a comment line
-/// with `Lattice`, `Properties=species:S:1:pos:R:3:velo:R:3:id:I:1` and `Time`, and one line per
-/// body. Bodies with an attitude (rods, site molecules) add `orientation:R:4` (unit quaternion,
-/// scalar last, OVITO's Orientation.X/Y/Z/W) and `aspherical_shape:R:3` before the id;
-/// semi-flexible molecules are written as their atoms, one line each, with `molecule:I:1`
-/// before the id. Written to `trajectory.xyz.partial` and renamed when the run ends.
+/// `u` wrapped into `[0, L)` and the periodic image `n` with `u = wrapped + n L`.
+fn wrap_with_image(u: DVec3, l: DVec3) -> (DVec3, [i64; 3]) {
+    let mut p = DVec3::ZERO;
+    let mut image = [0i64; 3];
+    for k in 0..3 {
+        let n = (u[k] / l[k]).floor();
+        let mut w = u[k] - n * l[k];
+        let mut n = n as i64;
+        if w >= l[k] {
+            w -= l[k];
+            n += 1;
+        } else if w < 0.0 {
+            w += l[k];
+            n -= 1;
+        }
+        p[k] = w;
+        image[k] = n;
+    }
+    (p, image)
+}
+
+/// The lab angular velocity of a body of attitude `q` (body → lab), lab angular momentum `l`
+/// and principal moments `moments` about its body axes (a zero moment: no rotation about that
+/// axis, as a rod's about its own).
+pub fn angular_velocity(q: DQuat, l: DVec3, moments: [f64; 3]) -> DVec3 {
+    let lb = q.inverse() * l;
+    let div = |x: f64, i: f64| if i > 0.0 { x / i } else { 0.0 };
+    q * DVec3::new(
+        div(lb.x, moments[0]),
+        div(lb.y, moments[1]),
+        div(lb.z, moments[2]),
+    )
+}
+
+/// An extended XYZ trajectory, read by OVITO and by ASE (`ase.io.read(path, index=":")`):
+/// per frame the line count, a comment line with `Lattice`, `Properties`, `Time` and `pbc`,
+/// and one line per body with the columns
+///
+/// - `species:S:1`: the species name (OVITO's particle type);
+/// - `pos:R:3`: the position wrapped into the box `[0, L)` (length);
+/// - `velo:R:3`: the velocity (length/time);
+/// - bodies with an attitude (rods, tops, site molecules): `orientation:R:4`, the attitude
+///   (body → lab) as a unit quaternion with the scalar last (OVITO's Orientation.X/Y/Z/W);
+///   `aspherical_shape:R:3`, the semi-axes of the ellipsoid it is drawn as (length); and
+///   `omega:R:3`, the lab angular velocity (1/time);
+/// - `map_shift:I:3`: the periodic image, so that `pos + map_shift · L` is the unwrapped
+///   position (OVITO's Periodic Image);
+/// - `Z:I:1`: the atomic number ([`element_of`]; ASE types atoms by it);
+/// - `masses:R:1` and `momenta:R:3`: mass and `m v`, ASE's masses and momenta (in
+///   molecular units amu and amu·√(eV/amu), so that ASE's `get_velocities()` is in its own
+///   units; in reduced units mass and `m v` as they are);
+/// - `id:I:1`: the body's index.
+///
+/// Semi-flexible molecules are written as their atoms, one line each (with the atom's kind,
+/// mass and velocity), with `molecule:I:1` before the id. Written to
+/// `trajectory.xyz.partial` and renamed when the run ends.
 #[derive(Debug)]
 pub struct Trajectory {
     path: PathBuf,
     tmp: PathBuf,
     out: BufWriter<File>,
-    names: Vec<String>,
     error: Option<String>,
     frames: u64,
-    shape: [f64; 3],
     layout: Layout,
 }
-
-/// Semi-axes of the ellipsoid a rod is drawn as, unless [`Trajectory::with_shape`] says
-/// otherwise.
-const ROD_SHAPE: [f64; 3] = [0.5, 0.5, 1.5];
 
 /// The unit quaternion (shortest arc) that turns `z` into `axis`.
 pub fn axis_quaternion(axis: DVec3) -> DQuat {
@@ -569,38 +677,21 @@ pub fn axis_quaternion(axis: DVec3) -> DQuat {
 }
 
 impl Trajectory {
-    /// Opens `path` (as a temporary file) for species `names`.
+    /// Opens `path` (as a temporary file) for bodies drawn as `layout` says.
     ///
     /// # Errors
     /// [`OutputError`].
-    pub fn create(path: &Path, names: Vec<String>) -> Result<Self, OutputError> {
+    pub fn create(path: &Path, layout: Layout) -> Result<Self, OutputError> {
         let tmp = temporary(path);
         let f = File::create(&tmp).map_err(|e| io_err(&tmp, e))?;
         Ok(Trajectory {
             path: path.to_owned(),
             tmp,
             out: BufWriter::new(f),
-            names,
             error: None,
             frames: 0,
-            shape: ROD_SHAPE,
-            layout: Layout::default(),
+            layout,
         })
-    }
-
-    /// The same trajectory drawing rods as ellipsoids of semi-axes `shape` (for OVITO's
-    /// aspherical shape; the third is along the rod).
-    pub fn with_shape(mut self, shape: [f64; 3]) -> Self {
-        self.shape = shape;
-        self
-    }
-
-    /// The same trajectory drawing each species as `layout` says (site molecules as the
-    /// ellipsoids their sites span, semi-flexible molecules as their atoms); without it, bodies
-    /// with an attitude are drawn as rods.
-    pub fn with_layout(mut self, layout: Layout) -> Self {
-        self.layout = layout;
-        self
     }
 
     /// Appends a frame (errors are kept and reported by [`finish`](Self::finish)).
@@ -608,94 +699,118 @@ impl Trajectory {
         if self.error.is_some() {
             return;
         }
-        let l = view.lengths;
-        let wrap = |p: DVec3| {
-            DVec3::new(
-                p.x.rem_euclid(l.x),
-                p.y.rem_euclid(l.y),
-                p.z.rem_euclid(l.z),
-            )
-        };
-        let mut go = || -> std::io::Result<()> {
-            let head = |out: &mut BufWriter<File>, lines: usize, props: &str| {
-                writeln!(out, "{lines}")?;
-                writeln!(
-                    out,
-                    "Lattice=\"{} 0 0 0 {} 0 0 0 {}\" Properties={props} Time={} pbc=\"T T T\"",
-                    l.x, l.y, l.z, view.elapsed
-                )
-            };
-            if self.layout.atoms() {
-                if view.atoms.len() < view.bodies.len() {
-                    return Err(missing_atoms(view.atoms.len(), view.now));
-                }
-                let lines = view.atoms.iter().map(|(q, _)| q.len()).sum();
-                head(
-                    &mut self.out,
-                    lines,
-                    "species:S:1:pos:R:3:velo:R:3:molecule:I:1:id:I:1",
-                )?;
-                let mut id = 0;
-                for (i, (b, (q, u))) in view.bodies.iter().zip(&view.atoms).enumerate() {
-                    let kinds = match &self.layout.drawings[b.species as usize] {
-                        Drawing::Atoms { kinds } => kinds.as_slice(),
-                        _ => &[],
-                    };
-                    let centre = view.position(i);
-                    for (a, (&qa, &ua)) in q.iter().zip(u).enumerate() {
-                        let p = wrap(centre + qa);
-                        let v = b.v + ua;
-                        let kind = kinds
-                            .get(a)
-                            .map_or("X", |&k| self.layout.kinds[k as usize].0.as_str());
-                        writeln!(
-                            self.out,
-                            "{kind} {:.10} {:.10} {:.10} {:.10} {:.10} {:.10} {i} {id}",
-                            p.x, p.y, p.z, v.x, v.y, v.z
-                        )?;
-                        id += 1;
-                    }
-                }
-                return Ok(());
-            }
-            let oriented = !view.attitudes.is_empty();
-            let props = if oriented {
-                "species:S:1:pos:R:3:velo:R:3:orientation:R:4:aspherical_shape:R:3:id:I:1"
-            } else {
-                "species:S:1:pos:R:3:velo:R:3:id:I:1"
-            };
-            head(&mut self.out, view.bodies.len(), props)?;
-            for (i, b) in view.bodies.iter().enumerate() {
-                let p = wrap(view.position(i));
-                write!(
-                    self.out,
-                    "{} {:.10} {:.10} {:.10} {:.10} {:.10} {:.10} ",
-                    self.names[b.species as usize], p.x, p.y, p.z, b.v.x, b.v.y, b.v.z
-                )?;
-                if oriented {
-                    // The attitude (body → lab) as a unit quaternion with the scalar last
-                    // (OVITO's Orientation); a rod is drawn as an ellipsoid along its body z
-                    // axis, three times as long as it is wide, a site molecule as the
-                    // ellipsoid its sites span along its principal axes.
-                    let q = view.attitudes[i];
-                    let e = match self.layout.drawings.get(b.species as usize) {
-                        None | Some(Drawing::Rod) => self.shape,
-                        Some(d) => d.semi_axes(self.shape),
-                    };
-                    write!(
-                        self.out,
-                        "{:.12} {:.12} {:.12} {:.12} {} {} {} ",
-                        q.x, q.y, q.z, q.w, e[0], e[1], e[2]
-                    )?;
-                }
-                writeln!(self.out, "{i}")?;
-            }
-            Ok(())
-        };
-        match go() {
+        match self.frame(view) {
             Ok(()) => self.frames += 1,
             Err(e) => self.error = Some(e.to_string()),
         }
+    }
+
+    fn frame(&mut self, view: &View<'_>) -> std::io::Result<()> {
+        let l = view.lengths;
+        let layout = &self.layout;
+        let out = &mut self.out;
+        let head = |out: &mut BufWriter<File>, lines: usize, props: &str| {
+            writeln!(out, "{lines}")?;
+            writeln!(
+                out,
+                "Lattice=\"{} 0 0 0 {} 0 0 0 {}\" Properties={props} Time={} pbc=\"T T T\"",
+                l.x, l.y, l.z, view.elapsed
+            )
+        };
+        // Position, velocity, …, then image, element, mass and ASE's momentum.
+        let tail = |out: &mut BufWriter<File>, im: [i64; 3], z: u8, m: f64, v: DVec3| {
+            let p = v * (m * layout.momentum_unit);
+            write!(
+                out,
+                "{} {} {} {z} {m} {:.10e} {:.10e} {:.10e} ",
+                im[0], im[1], im[2], p.x, p.y, p.z
+            )
+        };
+        if layout.atoms() {
+            if view.atoms.len() < view.bodies.len() {
+                return Err(missing_atoms(view.atoms.len(), view.now));
+            }
+            let lines = view.atoms.iter().map(|(q, _)| q.len()).sum();
+            head(
+                out,
+                lines,
+                "species:S:1:pos:R:3:velo:R:3:map_shift:I:3:Z:I:1:masses:R:1:momenta:R:3:\
+                 molecule:I:1:id:I:1",
+            )?;
+            let mut id = 0;
+            for (i, (b, (q, u))) in view.bodies.iter().zip(&view.atoms).enumerate() {
+                let (kinds, masses) = match &layout.drawings[b.species as usize] {
+                    Drawing::Atoms { kinds, masses } => (kinds.as_slice(), masses.as_slice()),
+                    _ => (&[][..], &[][..]),
+                };
+                let centre = view.unwrapped(i);
+                for (a, (&qa, &ua)) in q.iter().zip(u).enumerate() {
+                    let (p, im) = wrap_with_image(centre + qa, l);
+                    let v = b.v + ua;
+                    let (Some(&k), Some(&m)) = (kinds.get(a), masses.get(a)) else {
+                        return Err(std::io::Error::other(format!(
+                            "molecule {i} has more atoms than its species"
+                        )));
+                    };
+                    let (kind, z) = (
+                        &layout.kinds[k as usize].0,
+                        layout.kind_elements[k as usize],
+                    );
+                    write!(
+                        out,
+                        "{kind} {:.10} {:.10} {:.10} {:.10} {:.10} {:.10} ",
+                        p.x, p.y, p.z, v.x, v.y, v.z
+                    )?;
+                    tail(out, im, z, m, v)?;
+                    writeln!(out, "{i} {id}")?;
+                    id += 1;
+                }
+            }
+            return Ok(());
+        }
+        let oriented = !view.attitudes.is_empty();
+        let spun = oriented && view.spins.len() == view.bodies.len() && !layout.moments.is_empty();
+        let props = match (oriented, spun) {
+            (true, true) => {
+                "species:S:1:pos:R:3:velo:R:3:orientation:R:4:aspherical_shape:R:3:omega:R:3:\
+                 map_shift:I:3:Z:I:1:masses:R:1:momenta:R:3:id:I:1"
+            }
+            (true, false) => {
+                "species:S:1:pos:R:3:velo:R:3:orientation:R:4:aspherical_shape:R:3:\
+                 map_shift:I:3:Z:I:1:masses:R:1:momenta:R:3:id:I:1"
+            }
+            _ => "species:S:1:pos:R:3:velo:R:3:map_shift:I:3:Z:I:1:masses:R:1:momenta:R:3:id:I:1",
+        };
+        head(out, view.bodies.len(), props)?;
+        for (i, b) in view.bodies.iter().enumerate() {
+            let s = b.species as usize;
+            let (p, im) = wrap_with_image(view.unwrapped(i), l);
+            write!(
+                out,
+                "{} {:.10} {:.10} {:.10} {:.10} {:.10} {:.10} ",
+                layout.species[s], p.x, p.y, p.z, b.v.x, b.v.y, b.v.z
+            )?;
+            if oriented {
+                let q = view.attitudes[i];
+                let e = layout
+                    .drawings
+                    .get(s)
+                    .and_then(Drawing::semi_axes)
+                    .ok_or_else(|| std::io::Error::other(format!("species {s} has no shape")))?;
+                write!(
+                    out,
+                    "{:.12} {:.12} {:.12} {:.12} {} {} {} ",
+                    q.x, q.y, q.z, q.w, e[0], e[1], e[2]
+                )?;
+                if spun {
+                    let w = angular_velocity(q, view.spins[i], layout.moments[s]);
+                    write!(out, "{:.10} {:.10} {:.10} ", w.x, w.y, w.z)?;
+                }
+            }
+            tail(out, im, layout.elements[s], view.masses[s], b.v)?;
+            writeln!(out, "{i}")?;
+        }
+        Ok(())
     }
 
     /// Frames written.
@@ -704,7 +819,7 @@ impl Trajectory {
     }
 
     /// Flushes the frames written so far and returns the length of the temporary file and the
-    /// frame count (a checkpoint records them, issue 9).
+    /// frame count (a checkpoint records them).
     ///
     /// # Errors
     /// [`OutputError`] with the first write error of the run, if any.
@@ -723,17 +838,12 @@ impl Trajectory {
     }
 
     /// Reopens the temporary file of a trajectory interrupted after `len` bytes and `frames`
-    /// frames (a resumed run, issue 9): frames written after that point are cut off and new
-    /// ones appended.
+    /// frames (a resumed run): frames written after that point are cut off and new ones
+    /// appended.
     ///
     /// # Errors
     /// [`OutputError`] if the temporary file is missing or shorter than `len`.
-    pub fn reopen(
-        path: &Path,
-        names: Vec<String>,
-        len: u64,
-        frames: u64,
-    ) -> Result<Self, OutputError> {
+    pub fn reopen(path: &Path, layout: Layout, len: u64, frames: u64) -> Result<Self, OutputError> {
         let tmp = temporary(path);
         let f = std::fs::OpenOptions::new()
             .write(true)
@@ -756,11 +866,9 @@ impl Trajectory {
             path: path.to_owned(),
             tmp,
             out,
-            names,
             error: None,
             frames,
-            shape: ROD_SHAPE,
-            layout: Layout::default(),
+            layout,
         })
     }
 
@@ -808,7 +916,6 @@ pub struct GsdTrajectory {
     path: PathBuf,
     writer: gsd::Writer,
     layout: Layout,
-    rod: [f64; 3],
     error: Option<String>,
 }
 
@@ -823,7 +930,6 @@ impl GsdTrajectory {
             path: path.to_owned(),
             writer,
             layout,
-            rod: ROD_SHAPE,
             error: None,
         })
     }
@@ -861,7 +967,6 @@ impl GsdTrajectory {
             path: path.to_owned(),
             writer,
             layout,
-            rod: ROD_SHAPE,
             error: None,
         })
     }
@@ -884,10 +989,10 @@ impl GsdTrajectory {
                 Drawing::Sphere { diameter } => gsd::Shape::Sphere {
                     diameter: *diameter,
                 },
-                Drawing::Rod => gsd::Shape::Ellipsoid {
-                    a: self.rod[0],
-                    b: self.rod[1],
-                    c: self.rod[2],
+                Drawing::Rod { semi_axes } => gsd::Shape::Ellipsoid {
+                    a: semi_axes[0],
+                    b: semi_axes[1],
+                    c: semi_axes[2],
                 },
                 Drawing::Sites { centres, diameters } => {
                     // GSD's SphereUnion (OVITO draws it): the sites in the body frame.
@@ -960,7 +1065,7 @@ impl GsdTrajectory {
             }
             for (i, (b, (q, u))) in view.bodies.iter().zip(&view.atoms).enumerate() {
                 let kinds = match &self.layout.drawings[b.species as usize] {
-                    Drawing::Atoms { kinds } => kinds.as_slice(),
+                    Drawing::Atoms { kinds, .. } => kinds.as_slice(),
                     _ => &[],
                 };
                 let centre = view.unwrapped(i);
@@ -1093,6 +1198,52 @@ mod tests {
         // Short: 0.1 is written as 1e-1, not 1.0000000000e-1.
         assert_eq!(text.lines().nth(1), Some("1e-1"));
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn elements_by_symbol_name_or_none() {
+        assert_eq!(atomic_number("O"), Some(8));
+        assert_eq!(atomic_number("Og"), Some(118));
+        assert_eq!(atomic_number("X"), Some(0));
+        assert_eq!(atomic_number("o"), None);
+        assert_eq!(element_of("Ar", None), 18);
+        assert_eq!(element_of("rod", None), 0);
+        assert_eq!(element_of("water", Some("O")), 8);
+        assert_eq!(element_of("S", Some("X")), 0);
+    }
+
+    #[test]
+    fn images_restore_the_unwrapped_position() {
+        let l = DVec3::new(2.0, 3.0, 5.0);
+        for u in [
+            DVec3::new(-0.5, 7.25, 4.999),
+            DVec3::new(2.0, -3.0, 0.0),
+            DVec3::new(-1e-17, 1e6 + 0.1, -12.5),
+        ] {
+            let (p, n) = wrap_with_image(u, l);
+            for k in 0..3 {
+                assert!((0.0..l[k]).contains(&p[k]), "{u} → {p}");
+                let back = p[k] + n[k] as f64 * l[k];
+                assert!(
+                    (back - u[k]).abs() <= 1e-9 * (1.0 + u[k].abs()),
+                    "{u} → {p}, {n:?}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn angular_velocity_from_momentum_and_moments() {
+        // A rod along x (body z turned onto x) spinning about lab z: ω = L / I.
+        let q = axis_quaternion(DVec3::X);
+        let w = angular_velocity(q, DVec3::new(0.0, 0.0, 2.0), [0.5, 0.5, 0.0]);
+        assert!((w - DVec3::new(0.0, 0.0, 4.0)).length() < 1e-12, "{w}");
+        // An asymmetric top: ω_body = L_body / I component by component.
+        let q = DQuat::from_euler(glam::EulerRot::ZYX, 0.3, -1.1, 2.0);
+        let wb = DVec3::new(0.7, -1.3, 2.2);
+        let i = [1.0, 2.0, 3.0];
+        let l = q * (DVec3::from(i) * wb);
+        assert!((angular_velocity(q, l, i) - q * wb).length() < 1e-12);
     }
 
     #[test]

@@ -7,7 +7,8 @@ use rand::{RngExt, SeedableRng};
 use rand_distr::{Distribution, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;
 
-use crate::config::scene::{Positions, Scene, SceneError};
+use crate::analysis::output::ASE_VELOCITY_IN_A_PER_PS;
+use crate::config::scene::{Positions, PotentialSpec, Scene, SceneError, UnitSystem};
 
 /// Positions, species and box of the initial configuration.
 #[derive(Clone, Debug, PartialEq)]
@@ -142,29 +143,161 @@ pub fn lattice(scene: &Scene, smallest_core: f64) -> Result<Configuration, Scene
     })
 }
 
+/// How errors name a start file: as the scene gives it (`init.file`), else its path.
+fn shown(scene: &Scene, path: &Path) -> String {
+    scene
+        .init
+        .file
+        .as_ref()
+        .map_or(path, |f| f.as_path())
+        .display()
+        .to_string()
+}
+
+/// One frame of an XYZ file: its comment line and its rows, split into words, each with its
+/// line number in the file (from 1), in body order: by the `id:I:1` column when the frame has
+/// one (`dmd` writes it), else as they stand.
+struct XyzFrame<'a> {
+    comment: &'a str,
+    rows: Vec<(usize, Vec<&'a str>)>,
+}
+
+/// Frame `index` of `text` (0 the first, −1 the last) for `n` bodies; errors as plain
+/// messages (the caller names the key and the file).
+fn xyz_frame(text: &str, index: i64, n: usize) -> Result<XyzFrame<'_>, String> {
+    let lines: Vec<&str> = text.lines().collect();
+    // The first line of every frame up to the one asked for (all of them from the end).
+    let mut starts = Vec::new();
+    let mut at = 0;
+    while at < lines.len() && (index < 0 || starts.len() as i64 <= index) {
+        if starts.is_empty() || !lines[at].trim().is_empty() {
+            let count: usize = lines[at].trim().parse().map_err(|_| {
+                if starts.is_empty() {
+                    "the first line must be the number of bodies".to_owned()
+                } else {
+                    format!("line {}: expected the number of bodies of a frame", at + 1)
+                }
+            })?;
+            starts.push(at);
+            at += count + 2;
+        } else {
+            at += 1;
+        }
+    }
+    if starts.is_empty() {
+        return Err("the first line must be the number of bodies".into());
+    }
+    let frames = starts.len() as i64;
+    let k = if index < 0 { frames + index } else { index };
+    if !(0..frames).contains(&k) {
+        return Err(format!(
+            "init.frame = {index}, but the file has {} {}",
+            if index < 0 { frames } else { k.min(frames) },
+            if frames == 1 { "frame" } else { "frames" }
+        ));
+    }
+    let start = starts[k as usize];
+    let count: usize = lines[start].trim().parse().expect("parsed above");
+    if count != n {
+        return Err(format!(
+            "the file has {count} bodies, the scene's species count {n}"
+        ));
+    }
+    let comment = lines.get(start + 1).copied().unwrap_or("");
+    let mut rows = Vec::with_capacity(count);
+    for j in 0..count {
+        let line = start + 2 + j;
+        let text = lines
+            .get(line)
+            .ok_or_else(|| format!("ends after {j} of {count} bodies"))?;
+        rows.push((line + 1, text.split_whitespace().collect::<Vec<_>>()));
+    }
+    if let Some(at) = column(comment, "id", 1)? {
+        let mut ordered: Vec<Option<(usize, Vec<&str>)>> = vec![None; count];
+        for (line, words) in rows {
+            let id = words
+                .get(at)
+                .and_then(|w| w.parse::<usize>().ok())
+                .filter(|&id| id < count && ordered[id].is_none())
+                .ok_or_else(|| {
+                    format!(
+                        "line {line}: id `{}`: the ids of a frame must be 0 … {}, each once",
+                        words.get(at).unwrap_or(&""),
+                        count - 1
+                    )
+                })?;
+            ordered[id] = Some((line, words));
+        }
+        rows = ordered
+            .into_iter()
+            .map(|r| r.expect("each id once"))
+            .collect();
+    }
+    Ok(XyzFrame { comment, rows })
+}
+
+/// The first word of column `name` (of `width` components) in the `Properties=…` of an
+/// extended-XYZ comment line; `None` without that column or without `Properties`.
+fn column(comment: &str, name: &str, width: usize) -> Result<Option<usize>, String> {
+    let Some(props) = comment
+        .split_whitespace()
+        .find_map(|w| w.strip_prefix("Properties="))
+    else {
+        return Ok(None);
+    };
+    let fields: Vec<&str> = props.split(':').collect();
+    let mut at = 0;
+    for f in fields.chunks(3) {
+        let [field, _, count] = f else {
+            return Err(format!("malformed Properties={props}"));
+        };
+        let count: usize = count
+            .parse()
+            .map_err(|_| format!("malformed Properties={props}"))?;
+        if *field == name {
+            if count != width {
+                return Err(format!("the {name} column must have {width} components"));
+            }
+            return Ok(Some(at));
+        }
+        at += count;
+    }
+    Ok(None)
+}
+
+/// `width` finite numbers from word `at` of each row, or the line that lacks them.
+fn numbers(frame: &XyzFrame<'_>, at: usize, width: usize) -> Result<Vec<Vec<f64>>, usize> {
+    frame
+        .rows
+        .iter()
+        .map(|(line, words)| {
+            let v: Vec<f64> = words
+                .iter()
+                .skip(at)
+                .take(width)
+                .filter_map(|w| w.parse::<f64>().ok().filter(|x| x.is_finite()))
+                .collect();
+            if v.len() == width { Ok(v) } else { Err(*line) }
+        })
+        .collect()
+}
+
 /// Reads positions from an XYZ or extended XYZ file: a count line, a comment line (an
 /// extended-XYZ `Lattice="Lx 0 0 0 Ly 0 0 0 Lz"` gives the box), then `species x y z …` per
-/// body. The species must be the scene's, in the scene's counts; only the first frame is read.
+/// body. The species must be the scene's, in the scene's counts. The frame read is
+/// `init.frame` (default the first); with an `id:I:1` column the rows go to the bodies their
+/// ids name.
 ///
 /// # Errors
 /// [`SceneError::Invalid`] naming `init.file` for unreadable or inconsistent files.
 pub fn read_xyz(scene: &Scene, path: &Path) -> Result<Configuration, SceneError> {
     let key = "init.file";
-    let err = |msg: String| SceneError::invalid(key, format!("{}: {msg}", path.display()));
+    let name = shown(scene, path);
+    let err = |msg: String| SceneError::invalid(key, format!("{name}: {msg}"));
     let text = std::fs::read_to_string(path).map_err(|e| err(e.to_string()))?;
-    let mut lines = text.lines();
-    let count: usize = lines
-        .next()
-        .and_then(|l| l.trim().parse().ok())
-        .ok_or_else(|| err("the first line must be the number of bodies".into()))?;
-    if count as u64 != scene.n_bodies() {
-        return Err(err(format!(
-            "the file has {count} bodies, the scene's species count {}",
-            scene.n_bodies()
-        )));
-    }
-    let comment = lines.next().unwrap_or("");
-    let file_box = parse_lattice(comment).map_err(&err)?;
+    let count = scene.n_bodies() as usize;
+    let frame = xyz_frame(&text, scene.init.frame.unwrap_or(0), count).map_err(&err)?;
+    let file_box = parse_lattice(frame.comment).map_err(&err)?;
     let lengths = match (box_lengths(scene), file_box) {
         (Some(l), _) => l,
         (None, Some(l)) => l,
@@ -178,23 +311,22 @@ pub fn read_xyz(scene: &Scene, path: &Path) -> Result<Configuration, SceneError>
     let mut positions = Vec::with_capacity(count);
     let mut species = Vec::with_capacity(count);
     let mut per_species = vec![0u64; names.len()];
-    for k in 0..count {
-        let line = lines
-            .next()
-            .ok_or_else(|| err(format!("ends after {k} of {count} bodies")))?;
-        let mut f = line.split_whitespace();
-        let name = f.next().unwrap_or("");
+    for (line, words) in &frame.rows {
+        let name = words.first().copied().unwrap_or("");
         let s = names
             .iter()
             .position(|&n| n == name)
-            .ok_or_else(|| err(format!("line {}: unknown species `{name}`", k + 3)))?;
+            .ok_or_else(|| err(format!("line {line}: unknown species `{name}`")))?;
         let mut x = [0.0; 3];
-        for c in &mut x {
-            *c = f
-                .next()
-                .and_then(|v| v.parse::<f64>().ok())
+        for (c, w) in x
+            .iter_mut()
+            .zip(words.iter().skip(1).chain(std::iter::repeat(&"")))
+        {
+            *c = w
+                .parse::<f64>()
+                .ok()
                 .filter(|v| v.is_finite())
-                .ok_or_else(|| err(format!("line {}: expected three finite coordinates", k + 3)))?;
+                .ok_or_else(|| err(format!("line {line}: expected three finite coordinates")))?;
         }
         per_species[s] += 1;
         positions.push(DVec3::from(x));
@@ -216,51 +348,40 @@ pub fn read_xyz(scene: &Scene, path: &Path) -> Result<Configuration, SceneError>
     })
 }
 
-/// Reads the orientations of rods from the first frame of an extended XYZ file: the
-/// `orientation:R:4` column of its `Properties` (unit quaternions with the scalar last, as
-/// `dmd` writes them); each body's axis is the quaternion's image of `z`.
+/// Reads the attitudes of `n` bodies from the frame `init.frame` of an extended XYZ file (as
+/// [`read_xyz`] picks it): the `orientation:R:4` column of its `Properties` (unit quaternions
+/// with the scalar last, as `dmd` writes them), normalised. Errors name `key`.
 ///
 /// # Errors
-/// [`SceneError::Invalid`] naming `init.orientations` for a file without the column or with
-/// bad numbers.
-pub fn read_orientations(path: &Path, n: usize) -> Result<Vec<DVec3>, SceneError> {
-    let key = "init.orientations";
-    let err = |msg: String| SceneError::invalid(key, format!("{}: {msg}", path.display()));
+/// [`SceneError::Invalid`] naming `key` for a file without the column or with bad numbers.
+pub fn read_attitudes(
+    scene: &Scene,
+    path: &Path,
+    n: usize,
+    key: &str,
+) -> Result<Vec<glam::DQuat>, SceneError> {
+    let name = shown(scene, path);
+    let err = |msg: String| SceneError::invalid(key, format!("{name}: {msg}"));
     let text = std::fs::read_to_string(path).map_err(|e| err(e.to_string()))?;
-    let mut lines = text.lines().skip(1);
-    let comment = lines.next().unwrap_or("");
-    let props = comment
-        .split_whitespace()
-        .find_map(|w| w.strip_prefix("Properties="))
-        .ok_or_else(|| {
-            err("no Properties=… in the comment line, so no orientation column".into())
-        })?;
-    let fields: Vec<&str> = props.split(':').collect();
-    let mut column = 0;
-    let mut at = None;
-    for f in fields.chunks(3) {
-        let [name, _, count] = f else {
-            return Err(err(format!("malformed Properties={props}")));
-        };
-        let count: usize = count
-            .parse()
-            .map_err(|_| err(format!("malformed Properties={props}")))?;
-        if *name == "orientation" {
-            if count != 4 {
-                return Err(err("the orientation column must have 4 components".into()));
-            }
-            at = Some(column);
-        }
-        column += count;
+    let frame = xyz_frame(&text, scene.init.frame.unwrap_or(0), n).map_err(&err)?;
+    if !frame.comment.contains("Properties=") {
+        return Err(err(
+            "no Properties=… in the comment line, so no orientation column".into(),
+        ));
     }
-    let at = at.ok_or_else(|| err("the file has no orientation:R:4 column".into()))?;
-    let mut axes = Vec::with_capacity(n);
-    for k in 0..n {
-        let line = lines
-            .next()
-            .ok_or_else(|| err(format!("ends after {k} of {n} bodies")))?;
-        let v: Vec<f64> = line
-            .split_whitespace()
+    let at = column(frame.comment, "orientation", 4)
+        .map_err(|e| {
+            if e.starts_with("the orientation column") {
+                err("the orientation column must have 4 components".into())
+            } else {
+                err(e)
+            }
+        })?
+        .ok_or_else(|| err("the file has no orientation:R:4 column".into()))?;
+    let mut attitudes = Vec::with_capacity(n);
+    for (line, words) in &frame.rows {
+        let v: Vec<f64> = words
+            .iter()
             .skip(at)
             .take(4)
             .map(|x| x.parse::<f64>().unwrap_or(f64::NAN))
@@ -274,13 +395,85 @@ pub fn read_orientations(path: &Path, n: usize) -> Result<Vec<DVec3>, SceneError
         let len = q.length();
         if !(len.is_finite() && len > 0.5 && len < 2.0) {
             return Err(err(format!(
-                "line {}: the orientation is not a unit quaternion",
-                k + 3
+                "line {line}: the orientation is not a unit quaternion"
             )));
         }
-        axes.push((q / len) * DVec3::Z);
+        attitudes.push(q / len);
     }
-    Ok(axes)
+    Ok(attitudes)
+}
+
+/// Reads the orientations of rods from an extended XYZ file ([`read_attitudes`] with
+/// `init.frame`): each body's axis is its quaternion's image of `z`.
+///
+/// # Errors
+/// [`SceneError::Invalid`] naming `init.orientations` for a file without the column or with
+/// bad numbers.
+pub fn read_orientations(scene: &Scene, path: &Path, n: usize) -> Result<Vec<DVec3>, SceneError> {
+    let q = read_attitudes(scene, path, n, "init.orientations")?;
+    Ok(q.into_iter().map(|q| q * DVec3::Z).collect())
+}
+
+/// The motion a start file gives (`init.velocities = "file"`), per body in body order.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FileMotion {
+    /// Velocities, the `velo:R:3` column (length/time).
+    pub velocities: Vec<DVec3>,
+    /// Lab angular velocities, the `omega:R:3` column (1/time), when asked for.
+    pub omegas: Option<Vec<DVec3>>,
+}
+
+/// Reads the velocities (and with `rotating` the lab angular velocities) of the `n` bodies of
+/// the frame `init.frame` of `init.file`, in the units `dmd` writes them; the masses of the
+/// `masses:R:1` column, when the file has one, must be the scene's (`masses`, per body).
+///
+/// # Errors
+/// [`SceneError::Invalid`] naming `init.velocities` for a file without the columns, with bad
+/// numbers, or whose bodies' masses are not the scene's.
+pub fn read_motion(
+    scene: &Scene,
+    path: &Path,
+    masses: &[f64],
+    rotating: bool,
+) -> Result<FileMotion, SceneError> {
+    let key = "init.velocities";
+    let name = shown(scene, path);
+    let err = |msg: String| SceneError::invalid(key, format!("{name}: {msg}"));
+    let text = std::fs::read_to_string(path).map_err(|e| err(e.to_string()))?;
+    let n = masses.len();
+    let frame = xyz_frame(&text, scene.init.frame.unwrap_or(0), n).map_err(&err)?;
+    let vector = |name: &str, what: &str| -> Result<Vec<DVec3>, SceneError> {
+        let at = column(frame.comment, name, 3)
+            .map_err(&err)?
+            .ok_or_else(|| err(format!("the file has no {name}:R:3 column ({what})")))?;
+        numbers(&frame, at, 3)
+            .map(|v| {
+                v.into_iter()
+                    .map(|x| DVec3::new(x[0], x[1], x[2]))
+                    .collect()
+            })
+            .map_err(|line| err(format!("line {line}: expected three finite {what}")))
+    };
+    let velocities = vector("velo", "velocities")?;
+    let omegas = if rotating {
+        Some(vector("omega", "angular velocities")?)
+    } else {
+        None
+    };
+    if let Some(at) = column(frame.comment, "masses", 1).map_err(&err)? {
+        let file = numbers(&frame, at, 1).map_err(|line| err(format!("line {line}: bad mass")))?;
+        for ((m, x), (line, words)) in masses.iter().zip(&file).zip(&frame.rows) {
+            if (x[0] - m).abs() > 1e-9 * m.abs() {
+                return Err(err(format!(
+                    "line {line}: mass {} in the file, {m} for species `{}` in the scene: the \
+                     velocities belong to other bodies",
+                    x[0],
+                    words.first().unwrap_or(&"")
+                )));
+            }
+        }
+    }
+    Ok(FileMotion { velocities, omegas })
 }
 
 /// The box of an extended-XYZ comment line (orthorhombic lattices only).
@@ -347,6 +540,38 @@ pub fn maxwell_boltzmann(masses: &[f64], temperature: f64, seed: u64) -> Vec<DVe
         }
     }
     v
+}
+
+// ----- What trajectories take from a scene -----------------------------------------------------
+
+/// The ellipsoid a rod is drawn as, from its self-pair potential: semi-axes `(a, a, c)`, `c`
+/// along the rod (length).
+///
+/// - The modified Lennard-Jones rods (`rods`, `U = 0` at `r + ζ(½ − c²) = σ`): width
+///   `σ − ζ/2`, where two parallel rods' potential vanishes, and length `σ + ζ/2`, where two
+///   perpendicular rods' does.
+/// - Gay–Berne: breadth `σ₀` and length `κ σ₀`.
+pub fn rod_semi_axes(potential: &PotentialSpec) -> Option<[f64; 3]> {
+    match *potential {
+        PotentialSpec::Rods { sigma, zeta, .. } => {
+            let a = 0.5 * (sigma - 0.5 * zeta);
+            Some([a, a, 0.5 * (sigma + 0.5 * zeta)])
+        }
+        PotentialSpec::GayBerne { sigma0, kappa, .. } => {
+            Some([0.5 * sigma0, 0.5 * sigma0, 0.5 * kappa * sigma0])
+        }
+        PotentialSpec::LennardJones { .. } | PotentialSpec::SsdE { .. } => None,
+    }
+}
+
+/// The `momenta` column per internal momentum `m v` in a scene of unit `system`: in molecular
+/// units, where masses are amu and velocities Å/ps, `1 / `[`ASE_VELOCITY_IN_A_PER_PS`] (ASE's unit
+/// amu·√(eV/amu)); 1 in reduced units, which ASE has no counterpart of.
+pub fn ase_momentum_unit(system: UnitSystem) -> f64 {
+    match system {
+        UnitSystem::Reduced => 1.0,
+        UnitSystem::Molecular => 1.0 / ASE_VELOCITY_IN_A_PER_PS,
+    }
 }
 
 #[cfg(test)]

@@ -254,7 +254,8 @@ fn plain_terrace_map(
 
 /// The terraced model of a scene of rigid tops: attitudes uniform on SO(3) (or every body
 /// frame turned so that its `ẑ` lies along `init.axis`) and angular velocities from
-/// equipartition, scaled to exactly `3/2 N kT`, each from its own stream of the scene's seed.
+/// equipartition, scaled to exactly `3/2 N kT`, each from its own stream of the scene's seed;
+/// or `start`, the attitudes and lab angular velocities a start file gives.
 ///
 /// # Errors
 /// [`SceneError::Invalid`] naming `search` when the model refuses its settings.
@@ -262,6 +263,7 @@ pub fn tops_model(
     scene: &Scene,
     body_species: &[u32],
     tables: Vec<PairTable<Water>>,
+    start: Option<(Vec<glam::DQuat>, Vec<DVec3>)>,
 ) -> Result<Terraced<Water>, SceneError> {
     let species: Vec<BodySpecies<TopInertia>> = scene
         .species
@@ -277,7 +279,7 @@ pub fn tops_model(
         })
         .collect::<Result<_, _>>()?;
     let inertia: Vec<TopInertia> = species.iter().map(|s| s.inertia).collect();
-    let (poses, omegas) = tops_start(scene, &inertia, body_species);
+    let (poses, omegas) = start.unwrap_or_else(|| tops_start(scene, &inertia, body_species));
     Terraced::new(
         species,
         tables,

@@ -305,6 +305,10 @@ pub struct SpeciesSpec {
     /// Mass (default 1).
     #[serde(default = "one")]
     pub mass: f64,
+    /// The chemical element trajectories give the species' bodies (the `Z` column of
+    /// `trajectory.xyz`, which ASE types atoms by): a symbol such as `O` or `Ar`, or `X` for
+    /// none (default: the name when it is a chemical symbol, else `X`).
+    pub element: Option<String>,
     /// Moment of inertia about an axis through the centre perpendicular to the body's own:
     /// the body is a rod (a linear rotor, 003 §V). Spheres have none.
     pub inertia: Option<f64>,
@@ -648,6 +652,25 @@ pub struct InitSpec {
     pub orientations: Orientations,
     /// The common axis of `orientations = "aligned"`.
     pub axis: Option<[f64; 3]>,
+    /// Initial velocities: `maxwell-boltzmann` (default) at `temperature`, or `file`: the
+    /// `velo:R:3` column of `init.file` and, for rods and tops, its `omega:R:3` column (the
+    /// lab angular velocities), in the units `dmd` writes them.
+    #[serde(default)]
+    pub velocities: Velocities,
+    /// The frame of `init.file` to start from: 0 the first (default), 1 the second, …, −1 the
+    /// last, −2 the one before.
+    pub frame: Option<i64>,
+}
+
+/// Where the initial velocities come from.
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum Velocities {
+    /// Maxwell–Boltzmann at `init.temperature`, zero total momentum.
+    #[default]
+    MaxwellBoltzmann,
+    /// The `velo:R:3` (and `omega:R:3`) columns of `init.file`, as they are.
+    File,
 }
 
 /// Where the initial orientations of rods come from.
@@ -1098,6 +1121,60 @@ impl Scene {
                 ));
             }
             _ => {}
+        }
+        if self.init.frame.is_some() && self.init.positions != Positions::File {
+            return Err(SceneError::invalid(
+                "init.frame",
+                "only read when `init.positions = \"file\"`",
+            ));
+        }
+        if self.init.velocities == Velocities::File {
+            let tops = self
+                .pair
+                .first()
+                .and_then(|p| p.potential)
+                .is_some_and(|q| q.is_rigid());
+            if self.init.positions != Positions::File {
+                return Err(SceneError::invalid(
+                    "init.velocities",
+                    "`file` reads the velo column of `init.file`: it needs \
+                     `positions = \"file\"`",
+                ));
+            }
+            if self.has_sites() {
+                return Err(SceneError::invalid(
+                    "init.velocities",
+                    "`file` is available for spheres, rods and tops; site molecules start \
+                     from Maxwell–Boltzmann velocities",
+                ));
+            }
+            if self.has_rods() && !tops && self.init.orientations != Orientations::File {
+                return Err(SceneError::invalid(
+                    "init.velocities",
+                    "`file` gives rods the angular velocities of `init.file`, which belong \
+                     to its orientations: set `orientations = \"file\"` too",
+                ));
+            }
+            if tops && self.init.orientations != Orientations::Random {
+                return Err(SceneError::invalid(
+                    "init.velocities",
+                    "`file` gives tops the attitudes and angular velocities of `init.file` \
+                     (its orientation and omega columns): leave `init.orientations` out",
+                ));
+            }
+        }
+        for (k, sp) in self.species.iter().enumerate() {
+            if let Some(e) = &sp.element
+                && crate::analysis::output::atomic_number(e).is_none()
+            {
+                return Err(SceneError::invalid(
+                    format!("species[{k}].element"),
+                    format!(
+                        "`{e}` is not a chemical symbol: write it as the periodic table does \
+                         (`O`, `Ar`), or `X` for none"
+                    ),
+                ));
+            }
         }
         // Thermostat.
         let t = &self.thermostat;

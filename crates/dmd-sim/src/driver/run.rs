@@ -16,15 +16,19 @@ use serde::Serialize;
 
 use crate::analysis::observable::{Correlations, Observers, Rdf, Series};
 use crate::analysis::output::{
-    Drawing, GsdTrajectory, Layout, OutputError, Trajectory, write_atomically, write_csv,
+    Drawing, GsdTrajectory, Layout, OutputError, Trajectory, element_of, write_atomically,
+    write_csv,
 };
-use crate::config::init::{Configuration, lattice, maxwell_boltzmann, read_orientations, read_xyz};
+use crate::config::init::{
+    Configuration, ase_momentum_unit, lattice, maxwell_boltzmann, read_attitudes, read_motion,
+    read_orientations, read_xyz, rod_semi_axes,
+};
 use crate::config::rods::{
     Plan, equipartitioned_omegas, random_axes, rod_species, search_settings,
 };
 use crate::config::scene::{
     AcceptKind, EnsembleKind, Orientations, Positions, QueueKind, Scene, SceneError,
-    ThermostatKind, ThermostatPhase,
+    ThermostatKind, ThermostatPhase, Velocities,
 };
 use crate::config::units::Units;
 use crate::driver::checkpoint::{
@@ -40,6 +44,7 @@ use crate::engine::model::{HardSpheres, PairModel, Stepped};
 use crate::engine::schedule::Scheduler;
 use crate::engine::simulation::MAX_REBASE_EVENTS;
 use crate::engine::simulation::{Andersen, LoopSettings, Progress, SetupError, Simulation, Stop};
+use crate::models::rotor::TopInertia;
 use crate::models::search::SearchStats;
 use crate::models::terraced::{PairTable, Terraced};
 
@@ -285,7 +290,21 @@ pub fn run_scene_with(
         .iter()
         .map(|&s| scene.species[s as usize].mass)
         .collect();
-    let velocities = maxwell_boltzmann(&masses, scene.init.temperature, scene.seed);
+    // A start file's own velocities (and angular velocities of rods and tops), or
+    // Maxwell–Boltzmann ones; a resumed run takes its state from the checkpoint.
+    let rotating = matches!(plan, Plan::Rods(_) | Plan::GayBerne(_) | Plan::Tops(_));
+    let motion = match (&options.resume, scene.init.velocities) {
+        (None, Velocities::File) => {
+            let file = base.join(scene.init.file.as_ref().expect("checked"));
+            Some(read_motion(scene, &file, &masses, rotating)?)
+        }
+        _ => None,
+    };
+    let velocities = match &motion {
+        Some(m) => m.velocities.clone(),
+        None => maxwell_boltzmann(&masses, scene.init.temperature, scene.seed),
+    };
+    let omegas = motion.and_then(|m| m.omegas);
     let n = config.positions.len();
     let hard = matches!(&plan, Plan::Spheres(p) if p.all_hard_spheres());
     let skin = match &options.resume {
@@ -326,7 +345,7 @@ pub fn run_scene_with(
         model_name: plan.name(),
         options,
         smooth: std::cell::Cell::new(None),
-        layout: layout_of(scene, &plan),
+        layout: layout_of(scene, &plan, &units),
     };
     if fault > 0.0 {
         // Checked with the scene: fault injection is for sphere scenes.
@@ -384,7 +403,7 @@ pub fn run_scene_with(
                 config.lengths,
                 &tables,
             )?);
-            let model = terraced_model(scene, base, &config, tables)?;
+            let model = terraced_model(scene, base, &config, tables, omegas.as_deref())?;
             ctx.go_any_queue(model, reporter)
         }
         Plan::GayBerne(tables) => {
@@ -393,7 +412,7 @@ pub fn run_scene_with(
                 config.lengths,
                 &tables,
             )?);
-            let model = terraced_model(scene, base, &config, tables)?;
+            let model = terraced_model(scene, base, &config, tables, omegas.as_deref())?;
             ctx.go_any_queue(model, reporter)
         }
         Plan::Tops(tables) => {
@@ -402,7 +421,15 @@ pub fn run_scene_with(
                 config.lengths,
                 &tables,
             )?);
-            let model = crate::config::rods::tops_model(scene, &config.species, tables)?;
+            // A start file gives tops their whole attitudes with their angular velocities.
+            let start = match omegas {
+                Some(w) => {
+                    let file = base.join(scene.init.file.as_ref().expect("checked"));
+                    Some((read_attitudes(scene, &file, n, "init.velocities")?, w))
+                }
+                None => None,
+            };
+            let model = crate::config::rods::tops_model(scene, &config.species, tables, start)?;
             ctx.go_any_queue(model, reporter)
         }
         Plan::Sites(plan) => {
@@ -417,13 +444,43 @@ pub fn run_scene_with(
 }
 
 /// How trajectory frames draw each species of a scene: spheres of their hard-core diameter (or
-/// innermost step), rods as ellipsoids, rigid site molecules as their sites, semi-flexible
-/// molecules as their atoms.
-fn layout_of(scene: &Scene, plan: &Plan) -> Layout {
+/// innermost step), rods as the ellipsoids of their potential ([`rod_semi_axes`]), rigid site
+/// molecules as their sites, semi-flexible molecules as their atoms; with each species'
+/// element, its moments of inertia and the unit of the momenta (`units`: the scene's system).
+fn layout_of(scene: &Scene, plan: &Plan, units: &Units) -> Layout {
     let diameter = |p: &crate::engine::potential::StepPotential| p.core().unwrap_or(p.radii()[0]);
     let species: Vec<String> = scene.species.iter().map(|s| s.name.clone()).collect();
     let n = species.len() as u32;
-    let (drawings, kinds) = match plan {
+    let rod = |name: &str| {
+        // The like pair's potential, else the first pair the species is in.
+        let pairs = || {
+            scene
+                .pair
+                .iter()
+                .filter(|p| p.species.iter().any(|s| s == name))
+        };
+        pairs()
+            .find(|p| p.species[0] == p.species[1])
+            .into_iter()
+            .chain(pairs())
+            .find_map(|p| p.potential.as_ref().and_then(rod_semi_axes))
+            .unwrap_or([0.5; 3])
+    };
+    // A rod's moments, or a top's as its model takes them (a rounded planar body made planar).
+    let rotor_moments = || -> Vec<[f64; 3]> {
+        scene
+            .species
+            .iter()
+            .map(|s| match (s.inertia, s.moments) {
+                (Some(i), _) => [i, i, 0.0],
+                (None, Some(m)) => {
+                    TopInertia::new(DVec3::from(m)).map_or(m, |t| t.principal().to_array())
+                }
+                (None, None) => [0.0; 3],
+            })
+            .collect()
+    };
+    let (drawings, kinds, moments) = match plan {
         Plan::Spheres(potentials) => (
             (0..n)
                 .map(|s| Drawing::Sphere {
@@ -431,13 +488,24 @@ fn layout_of(scene: &Scene, plan: &Plan) -> Layout {
                 })
                 .collect(),
             Vec::new(),
+            Vec::new(),
         ),
-        Plan::Rods(_) | Plan::GayBerne(_) => (vec![Drawing::Rod; species.len()], Vec::new()),
+        Plan::Rods(_) | Plan::GayBerne(_) => (
+            species
+                .iter()
+                .map(|name| Drawing::Rod {
+                    semi_axes: rod(name),
+                })
+                .collect(),
+            Vec::new(),
+            rotor_moments(),
+        ),
         Plan::Tops(_) => {
             let (centres, diameters) = crate::config::rods::water_drawing();
             (
                 vec![Drawing::Sites { centres, diameters }; species.len()],
                 Vec::new(),
+                rotor_moments(),
             )
         }
         Plan::Sites(p) => (
@@ -453,12 +521,14 @@ fn layout_of(scene: &Scene, plan: &Plan) -> Layout {
                 })
                 .collect(),
             Vec::new(),
+            p.types.iter().map(|t| t.moments().to_array()).collect(),
         ),
         Plan::Flexible(p) => (
             p.types
                 .iter()
                 .map(|t| Drawing::Atoms {
                     kinds: t.site_species().to_vec(),
+                    masses: t.masses().to_vec(),
                 })
                 .collect(),
             p.kinds
@@ -466,21 +536,34 @@ fn layout_of(scene: &Scene, plan: &Plan) -> Layout {
                 .enumerate()
                 .map(|(k, name)| (name.clone(), diameter(p.potentials.get(k as u32, k as u32))))
                 .collect(),
+            Vec::new(),
         ),
     };
-    Layout {
-        species,
-        drawings,
-        kinds,
-    }
+    let mut layout = Layout::new(species, drawings);
+    layout.elements = scene
+        .species
+        .iter()
+        .map(|s| element_of(&s.name, s.element.as_deref()))
+        .collect();
+    layout.kind_elements = kinds
+        .iter()
+        .map(|(name, _): &(String, f64)| element_of(name, None))
+        .collect();
+    layout.kinds = kinds;
+    layout.moments = moments;
+    layout.momentum_unit = ase_momentum_unit(units.system);
+    layout
 }
 
-/// The terraced model of a rods scene: orientations and equipartitioned angular velocities.
+/// The terraced model of a rods scene: orientations, and equipartitioned angular velocities or
+/// a start file's (`omegas`, lab frame: their component along each rod's axis, round-off of
+/// the file's numbers, is dropped, as a linear rotor has none).
 fn terraced_model<P: potential::PairPotential>(
     scene: &Scene,
     base: &Path,
     config: &Configuration,
     tables: Vec<PairTable<P>>,
+    omegas: Option<&[DVec3]>,
 ) -> Result<Terraced<P>, RunError> {
     let n = config.positions.len();
     let axes = match scene.init.orientations {
@@ -491,7 +574,7 @@ fn terraced_model<P: potential::PairPotential>(
         }
         Orientations::File => {
             let file = scene.init.file.as_ref().expect("checked");
-            read_orientations(&base.join(file), n)?
+            read_orientations(scene, &base.join(file), n)?
         }
     };
     let species = rod_species(scene);
@@ -500,7 +583,14 @@ fn terraced_model<P: potential::PairPotential>(
         .iter()
         .map(|&s| species[s as usize].inertia)
         .collect();
-    let omegas = equipartitioned_omegas(&axes, &inertia, scene.init.temperature, scene.seed);
+    let omegas = match omegas {
+        Some(w) => w
+            .iter()
+            .zip(&axes)
+            .map(|(&w, &a)| w - w.dot(a) * a)
+            .collect(),
+        None => equipartitioned_omegas(&axes, &inertia, scene.init.temperature, scene.seed),
+    };
     Terraced::new(
         species,
         tables,
@@ -767,16 +857,15 @@ impl Context<'_> {
         observers.max_bytes = Some(crate::config::limits::max_bytes(scene));
         let out = self.out;
         if let (Some(_), Some(dir)) = (&o.trajectory, out) {
-            let names = scene.species.iter().map(|s| s.name.clone()).collect();
             let path = dir.join("trajectory.xyz");
-            let trajectory = match resume {
+            let layout = self.layout.clone();
+            observers.trajectory = Some(match resume {
                 Some((_, c)) if !fresh_production => {
                     let (len, frames) = c.observers.trajectory.unwrap_or((0, 0));
-                    Trajectory::reopen(&path, names, len, frames)?
+                    Trajectory::reopen(&path, layout, len, frames)?
                 }
-                _ => Trajectory::create(&path, names)?,
-            };
-            observers.trajectory = Some(trajectory.with_layout(self.layout.clone()));
+                _ => Trajectory::create(&path, layout)?,
+            });
         }
         if let (Some(_), Some(dir)) = (&o.gsd, out) {
             let path = dir.join("trajectory.gsd");

@@ -39,13 +39,17 @@ use smd::{
 
 use crate::analysis::observable::{Correlations, Observers, Rdf, Series};
 use crate::analysis::output::{
-    Drawing, Layout, OutputError, Trajectory, axis_quaternion, write_atomically,
+    Drawing, Layout, OutputError, Trajectory, axis_quaternion, element_of, write_atomically,
 };
-use crate::config::init::{Configuration, lattice, maxwell_boltzmann, read_orientations, read_xyz};
+use crate::config::init::{
+    Configuration, ase_momentum_unit, lattice, maxwell_boltzmann, read_attitudes, read_motion,
+    read_orientations, read_xyz, rod_semi_axes,
+};
 use crate::config::rods::{equipartitioned_omegas, random_axes, ssd_e, tops_start};
 pub use crate::config::scene::{Engine, SmdSpec, SmoothingSpec};
 use crate::config::scene::{
     Orientations, Positions, PotentialSpec, Scene, SceneError, ThermostatKind, UnitSystem,
+    Velocities,
 };
 use crate::config::smd_spec::{check, default_dt, ignored_keys, list_skin, window};
 use crate::config::units::Units;
@@ -276,13 +280,26 @@ pub fn run_named(
 
     // The event-driven engine's initial state, from the same seed.
     let masses = vec![species.mass; n];
-    let velocities = maxwell_boltzmann(&masses, kt, scene.seed);
     let rods = pot.is_anisotropic();
+    // A start file's own velocities and angular velocities (`init.velocities = "file"`).
+    let start_file = base.join(scene.init.file.as_deref().unwrap_or(Path::new("")));
+    let motion = match scene.init.velocities {
+        Velocities::File => Some(read_motion(scene, &start_file, &masses, rods)?),
+        Velocities::MaxwellBoltzmann => None,
+    };
+    let velocities = match &motion {
+        Some(m) => m.velocities.clone(),
+        None => maxwell_boltzmann(&masses, kt, scene.seed),
+    };
+    let file_omegas = motion.and_then(|m| m.omegas);
     let (body, orientations, ang_mom) = if pot.is_rigid() {
         let moments = species.moments.expect("checked: tops have moments");
         let inertia = TopInertia::new(DVec3::from(moments))
             .map_err(|e| SceneError::invalid("species.moments", e))?;
-        let (poses, omegas) = tops_start(scene, &[inertia], &vec![0; n]);
+        let (poses, omegas) = match file_omegas {
+            Some(w) => (read_attitudes(scene, &start_file, n, "init.velocities")?, w),
+            None => tops_start(scene, &[inertia], &vec![0; n]),
+        };
         let principal = inertia.principal();
         // L = R (I ∘ ω_body), with ω_body = R⁻¹ ω.
         let l = poses
@@ -304,11 +321,17 @@ pub fn run_named(
             Orientations::Aligned => {
                 vec![DVec3::from(scene.init.axis.expect("checked")).normalize(); n]
             }
-            Orientations::File => {
-                read_orientations(&base.join(scene.init.file.as_ref().expect("checked")), n)?
-            }
+            Orientations::File => read_orientations(scene, &start_file, n)?,
         };
-        let omegas = equipartitioned_omegas(&axes, &vec![inertia; n], kt, scene.seed);
+        let omegas = match file_omegas {
+            // A linear rotor spins about no axis but its short ones.
+            Some(w) => w
+                .iter()
+                .zip(&axes)
+                .map(|(&w, &a)| w - w.dot(a) * a)
+                .collect(),
+            None => equipartitioned_omegas(&axes, &vec![inertia; n], kt, scene.seed),
+        };
         let l = omegas.iter().map(|w| *w * inertia).collect();
         (
             BodyModel::linear_rotor(species.mass, inertia).map_err(smd_error)?,
@@ -573,18 +596,38 @@ impl Job<'_> {
             observers.series = Some(Series::default());
         }
         if let (Some(_), Some(dir)) = (&o.trajectory, self.out) {
+            // Drawn as the event-driven engine draws the same scene.
             let names: Vec<String> = scene.species.iter().map(|s| s.name.clone()).collect();
-            let mut trajectory = Trajectory::create(&dir.join("trajectory.xyz"), names.clone())?;
-            if matches!(md.system().body(), BodyModel::Rigid { .. }) {
-                // Water drawn as the event-driven engine draws it: its atoms' extent.
-                let (centres, diameters) = crate::config::rods::water_drawing();
-                trajectory = trajectory.with_layout(Layout {
-                    drawings: vec![Drawing::Sites { centres, diameters }; names.len()],
-                    species: names,
-                    kinds: Vec::new(),
-                });
-            }
-            observers.trajectory = Some(trajectory);
+            let sp = &scene.species[0];
+            let pot = scene.pair[0].potential.as_ref();
+            let (drawing, moments) = match md.system().body() {
+                BodyModel::Rigid { .. } => {
+                    let (centres, diameters) = crate::config::rods::water_drawing();
+                    // As the model takes them (a rounded planar body made planar).
+                    let moments = sp.moments.map_or([0.0; 3], |m| {
+                        TopInertia::new(DVec3::from(m)).map_or(m, |t| t.principal().to_array())
+                    });
+                    (Drawing::Sites { centres, diameters }, vec![moments])
+                }
+                _ if sp.inertia.is_some() => {
+                    let i = sp.inertia.unwrap_or(0.0);
+                    let semi_axes = pot.and_then(rod_semi_axes).unwrap_or([0.5; 3]);
+                    (Drawing::Rod { semi_axes }, vec![[i, i, 0.0]])
+                }
+                _ => {
+                    let sigma = match pot {
+                        Some(PotentialSpec::LennardJones { sigma, .. })
+                        | Some(PotentialSpec::Rods { sigma, .. }) => *sigma,
+                        _ => 1.0,
+                    };
+                    (Drawing::Sphere { diameter: sigma }, Vec::new())
+                }
+            };
+            let mut layout = Layout::new(names, vec![drawing]);
+            layout.elements = vec![element_of(&sp.name, sp.element.as_deref())];
+            layout.moments = moments;
+            layout.momentum_unit = ase_momentum_unit(scene.units);
+            observers.trajectory = Some(Trajectory::create(&dir.join("trajectory.xyz"), layout)?);
         }
         // About 10⁴ rows of the energy series for the summary's means, drift and fluctuation.
         let stride = (self.production_steps / 10_000).max(1);
@@ -861,7 +904,15 @@ impl Observer for Bridge<'_> {
                         .map(|r| DQuat::from_mat3(r).normalize())
                         .collect()
                 };
-                observers.frame(0, &View { attitudes, ..view });
+                let spins = s.system.angular_momenta().to_vec();
+                observers.frame(
+                    0,
+                    &View {
+                        attitudes,
+                        spins,
+                        ..view
+                    },
+                );
             }
             self.observers = observers;
         }

@@ -23,4 +23,5 @@ mod smooth;
 mod support;
 mod terminal;
 mod tops;
+mod trajectory_tools;
 mod water_smd;

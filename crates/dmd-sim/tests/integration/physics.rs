@@ -339,9 +339,11 @@ fn outputs_are_written_with_headers() {
     let xyz = std::fs::read_to_string(dir.join("trajectory.xyz")).unwrap();
     let lines: Vec<&str> = xyz.lines().collect();
     assert_eq!(lines[0], "256");
-    assert!(lines[1].contains("Properties=species:S:1:pos:R:3:velo:R:3:id:I:1"));
+    assert!(lines[1].contains(
+        "Properties=species:S:1:pos:R:3:velo:R:3:map_shift:I:3:Z:I:1:masses:R:1:momenta:R:3:id:I:1"
+    ));
     assert!(lines[1].starts_with("Lattice=\""));
-    assert_eq!(lines[2].split_whitespace().count(), 8);
+    assert_eq!(lines[2].split_whitespace().count(), 16);
     assert!(lines.len() >= 2 * 258);
     // The summary mirrors the files and the diffusion estimates exist.
     let json: serde_json::Value =
