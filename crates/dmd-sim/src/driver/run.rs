@@ -36,10 +36,10 @@ use crate::driver::checkpoint::{
     SceneSource, Stage,
 };
 use crate::driver::hmc::{Acceptance, Chain, Ensemble, HmcSettings, HmcSummary};
-use crate::driver::reporting::{PlotInfo, terrace_step, write_observables};
 pub use crate::driver::reporting::{
     PhaseEnd, Quiet, Reporter, RunError, RunPlan, thread_cpu_seconds, unit_names,
 };
+use crate::driver::reporting::{PlotInfo, terrace_step, write_observables};
 use crate::engine::model::{HardSpheres, PairModel, Stepped};
 use crate::engine::schedule::Scheduler;
 use crate::engine::simulation::MAX_REBASE_EVENTS;
