@@ -350,19 +350,24 @@ fn frame_kinetic(path: &Path, moments: Option<DVec3>) -> f64 {
     k
 }
 
-/// The kinetic energy of the first row of `dir/series.csv` (the scene's unit).
+/// The kinetic energy at the start of the run in `dir` (the scene's unit): the summary's
+/// `temperature_start` times the ratio of kinetic energy to temperature of a `series.csv` row
+/// (the series starts one sampling interval later; the ratio is fixed by the degrees of freedom).
 fn first_kinetic(dir: &Path) -> f64 {
     let text = std::fs::read_to_string(dir.join("series.csv")).unwrap();
     let mut lines = text.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let k = header.iter().position(|&h| h == "kinetic").unwrap();
-    let row: Vec<&str> = lines.next().unwrap().split(',').collect();
-    assert_eq!(
-        row[0].parse::<f64>().unwrap(),
-        0.0,
-        "the first row is at t = 0"
-    );
-    row[k].parse().unwrap()
+    let at = |name: &str| header.iter().position(|&h| h == name).unwrap();
+    let row: Vec<f64> = lines
+        .next()
+        .unwrap()
+        .split(',')
+        .map(|x| x.parse().unwrap())
+        .collect();
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    let start = summary["temperature_start"].as_f64().unwrap();
+    start * row[at("kinetic")] / row[at("temperature")]
 }
 
 /// Overrides that start a scene from the last frame of `file`, in a box of the frame's edges
