@@ -889,7 +889,9 @@ where
                 self.nbrs.upsert(j, i, neighbour::opposite(code));
             } else {
                 self.nbrs.upsert(j, i, neighbour::opposite(code));
-                self.predict_pair(i, j, code);
+                if !M::PRUNES {
+                    self.predict_pair(i, j, code);
+                }
             }
         }
         for &o in &old {
@@ -902,8 +904,16 @@ where
         self.scratch_new = new;
         self.scratch_old = old;
         self.counters.shell += 1;
-        self.predict_shell(i);
-        self.reschedule(i);
+        if M::PRUNES {
+            // The list held no event beyond this crossing: predict every pair afresh (the
+            // events of unchanged pairs come out the same).
+            self.lists.clear(i);
+            let t = self.predict(i, Skip::Nobody);
+            self.set(i, t);
+        } else {
+            self.predict_shell(i);
+            self.reschedule(i);
+        }
     }
 
     /// Predicts the event of pair `(i, j)` (`j`'s image `code`) into `i`'s list.
@@ -1095,6 +1105,9 @@ where
             Skip::One(o) => (o, false),
             Skip::Lower => (i, true),
         };
+        // The skin exit first: with a pruning model no pair event after it is kept (the
+        // shell crossing predicts every pair afresh).
+        let shell = self.predict_shell(i);
         let (nbrs, bodies, model, lists, shifts, blindfold) = (
             &self.nbrs,
             &self.bodies,
@@ -1103,7 +1116,8 @@ where
             &self.shifts,
             &self.blindfold,
         );
-        let mut earliest = f64::INFINITY;
+        let horizon = shell - now;
+        let mut earliest = shell;
         for &e in nbrs.of(i) {
             let j = neighbour::partner(e);
             if j == other || (lower && j < i) || (HIDE && blindfold.hides(i, j)) {
@@ -1112,7 +1126,7 @@ where
             let bj = &bodies[j as usize];
             let dr = (ri - shifts[neighbour::code(e) as usize]) - bj.position_at(now);
             let dv = bi.v - bj.v;
-            if let Some((dt, kind)) = model.predict(&Pair {
+            let pair = Pair {
                 i,
                 j,
                 si: bi.species,
@@ -1120,13 +1134,19 @@ where
                 now,
                 dr,
                 dv,
-            }) {
+            };
+            let predicted = if M::PRUNES {
+                model.predict_before(&pair, horizon)
+            } else {
+                model.predict(&pair)
+            };
+            if let Some((dt, kind)) = predicted {
                 let time = now + dt;
                 earliest = earliest.min(time);
                 lists.push(i, Event::with_partner(time, j, bj.generation, kind));
             }
         }
-        earliest.min(self.predict_shell(i))
+        earliest
     }
 
     /// Predicts when body `i` leaves the skin sphere around its list centre (analytic: linear
