@@ -361,7 +361,7 @@ pub struct Simulation<M, S> {
     centres: Vec<DVec3>,
     nbrs: NeighbourLists,
     /// Displacement of each image code (see [`neighbour`]).
-    shifts: [DVec3; 27],
+    shifts: [DVec3; 32],
     skin2: f64,
     list2: f64,
     scratch_old: Vec<u32>,
@@ -469,10 +469,7 @@ where
         }
         let n_species = model.n_species();
         let masses: Vec<f64> = (0..n_species as u32).map(|s| model.mass(s)).collect();
-        let shifts: [DVec3; 27] = std::array::from_fn(|c| {
-            let o = neighbour::offsets(c as u32);
-            DVec3::new(f64::from(o[0]), f64::from(o[1]), f64::from(o[2])) * lengths
-        });
+        let shifts = neighbour::shift_table(lengths);
         // Neighbour lists, initial pair levels, and overlaps of hard cores.
         let list2 = list_radius * list_radius;
         let mut nbrs = NeighbourLists::new(n);
@@ -693,11 +690,17 @@ where
             self.set(p, e.time);
             return Ok(false);
         }
-        self.lists.remove(p, k);
         match (e.kind(), e.partner()) {
+            // A pair event clears both lists: no need to remove its entry first.
             (Kind::Pair(boundary), Some(j)) => self.pair_event(p, j, boundary)?,
-            (Kind::Virtual, Some(j)) => self.virtual_event(p, j),
-            _ => self.shell_event(p),
+            (Kind::Virtual, Some(j)) => {
+                self.lists.remove(p, k);
+                self.virtual_event(p, j);
+            }
+            _ => {
+                self.lists.remove(p, k);
+                self.shell_event(p);
+            }
         }
         if let Some(i) = self.nan {
             return Err(SimError::NanTime(i));
