@@ -863,6 +863,49 @@ mod tests {
         }
     }
 
+    proptest! {
+        /// Pruning drops only events later than the horizon, and keeps the others exactly
+        /// (one species and a mixture, whose contact distances come from the table).
+        #[test]
+        fn hard_spheres_prune_only_beyond_the_horizon(
+            r in prop::array::uniform3(-2.5f64..2.5),
+            v in prop::array::uniform3(-2.0f64..2.0),
+            horizon in prop_oneof![0.0f64..2.0, Just(f64::INFINITY)],
+            mixture in any::<bool>(),
+        ) {
+            let (n, tables) = if mixture {
+                (2, vec![
+                    ((0, 0), vec![[1.0, f64::INFINITY]]),
+                    ((0, 1), vec![[0.8, f64::INFINITY]]),
+                    ((1, 1), vec![[0.6, f64::INFINITY]]),
+                ])
+            } else {
+                (1, vec![((0, 0), vec![[1.0, f64::INFINITY]])])
+            };
+            let particles = vec![Particle::new(1.0).unwrap(); n];
+            let mut model = HardSpheres::new(Potentials::from_tables(n, &tables), particles);
+            let pair = Pair {
+                i: 0,
+                j: 1,
+                si: 0,
+                sj: (n - 1) as u32,
+                now: 0.0,
+                dr: DVec3::from(r),
+                dv: DVec3::from(v),
+            };
+            let sigma = if mixture { 0.8 } else { 1.0 };
+            prop_assume!(pair.dr.length() > sigma);
+            let full = model.predict(&pair);
+            let pruned = model.predict_before(&pair, horizon);
+            match (full, pruned) {
+                (Some(a), Some(b)) => prop_assert_eq!(a, b),
+                (Some((t, _)), None) => prop_assert!(t > horizon, "dropped {t} ≤ {horizon}"),
+                (None, Some(b)) => prop_assert!(false, "pruned found {b:?}, full none"),
+                (None, None) => {}
+            }
+        }
+    }
+
     #[test]
     fn grazing_and_far_pairs() {
         // Exactly tangent course, r = (−2, 1, 0), v = (1, 0, 0), R = 1: no collision (D = 0).
