@@ -23,6 +23,15 @@ impl Default for Cleanup {
 
 /// Invalidations between forced sweeps: less than the 2³² period of a wrapping `u32` stamp, so
 /// a stale ticket can never come back to life (see [`StampBook`]).
+/// The length above which a queue swept down to `len` is swept again: at least
+/// `cleanup.min_len` and more than `cleanup.growth × len` (`len > ⌊g·l⌋` is `len > g·l` for a
+/// whole `len`).
+fn sweep_above(cleanup: Cleanup, len: usize) -> usize {
+    let grown = (cleanup.growth * len as f64).floor();
+    // A float-to-integer `as` saturates (and takes NaN to 0).
+    (grown as usize).max(cleanup.min_len.saturating_sub(1))
+}
+
 const SWEEP_EVERY_INVALIDATIONS: u64 = 1 << 31;
 
 /// What a [`LazyQueue`] has done so far.
@@ -84,7 +93,9 @@ pub struct LazyQueue<Q> {
     queue: Q,
     book: StampBook,
     cleanup: Cleanup,
-    len_after_sweep: usize,
+    /// Sweep once the queue holds more than this (from the cleanup policy and the length
+    /// after the last sweep).
+    sweep_above: usize,
     invalidations_since_sweep: u64,
     stats: LazyStats,
 }
@@ -106,7 +117,7 @@ where
             queue,
             book: StampBook::new(participants),
             cleanup,
-            len_after_sweep: len,
+            sweep_above: sweep_above(cleanup, len),
             invalidations_since_sweep: 0,
             stats: LazyStats::default(),
         }
@@ -130,10 +141,9 @@ where
     pub fn schedule(&mut self, time: f64, payload: Q::Payload) -> Result<(), QueueError> {
         self.queue.push(time, payload)?;
         self.stats.scheduled += 1;
-        let len = self.queue.len();
-        let grown = len >= self.cleanup.min_len
-            && len as f64 > self.cleanup.growth * self.len_after_sweep as f64;
-        if grown || self.invalidations_since_sweep >= SWEEP_EVERY_INVALIDATIONS {
+        if self.queue.len() > self.sweep_above
+            || self.invalidations_since_sweep >= SWEEP_EVERY_INVALIDATIONS
+        {
             self.sweep();
         }
         Ok(())
@@ -174,7 +184,7 @@ where
         let removed = self.queue.retain(&mut |p| p.is_current(book));
         self.stats.sweeps += 1;
         self.stats.swept += removed as u64;
-        self.len_after_sweep = self.queue.len();
+        self.sweep_above = sweep_above(self.cleanup, self.queue.len());
         self.invalidations_since_sweep = 0;
         removed
     }

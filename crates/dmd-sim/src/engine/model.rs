@@ -125,6 +125,20 @@ pub trait PairModel {
     /// its kind ([`Kind::Pair`] or, for models with root searches, [`Kind::Virtual`]).
     fn predict(&mut self, pair: &Pair) -> Option<(f64, Kind)>;
 
+    /// Whether [`predict_before`](Self::predict_before) drops events later than its horizon.
+    /// A model that does is predicted with the time its body leaves the neighbour-list skin as
+    /// the horizon, and a body's list is predicted afresh from all its neighbours when it
+    /// rebuilds its neighbour list, so nothing dropped is ever missed.
+    const PRUNES: bool = false;
+
+    /// [`predict`](Self::predict), but a model with [`PRUNES`](Self::PRUNES) may return `None`
+    /// for a pair whose next event is certainly later than `horizon` (time from now), without
+    /// computing it.
+    #[inline(always)]
+    fn predict_before(&mut self, pair: &Pair, _horizon: f64) -> Option<(f64, Kind)> {
+        self.predict(pair)
+    }
+
     /// A virtual event of owner `i` with partner `j` has come due (both unchanged since it was
     /// scheduled): continue the pair's search. Models without virtual events never get one.
     fn resume(&mut self, _pair: &Pair) -> Option<(f64, Kind)> {
@@ -385,6 +399,8 @@ pub struct HardSpheres {
     n_species: usize,
     /// Squared contact distance per species pair.
     sigma2: Vec<f64>,
+    /// The squared contact distance of a one-species system (no table look-up per pair).
+    sigma2_one: f64,
     particles: Vec<Particle>,
     potentials: Potentials,
 }
@@ -402,12 +418,25 @@ impl HardSpheres {
                     .expect("hard core");
                 d * d
             })
-            .collect();
+            .collect::<Vec<f64>>();
         HardSpheres {
             n_species: n,
+            sigma2_one: sigma2[0],
             sigma2,
             particles,
             potentials,
+        }
+    }
+}
+
+impl HardSpheres {
+    /// The squared contact distance of species `si` and `sj`.
+    #[inline(always)]
+    fn contact2(&self, si: u32, sj: u32) -> f64 {
+        if self.n_species == 1 {
+            self.sigma2_one
+        } else {
+            self.sigma2[si as usize * self.n_species + sj as usize]
         }
     }
 }
@@ -437,9 +466,29 @@ impl PairModel for HardSpheres {
         if b >= 0.0 {
             return None;
         }
-        let sigma2 = self.sigma2[si as usize * self.n_species + sj as usize];
+        let sigma2 = self.contact2(si, sj);
         enter_time(dr.length_squared(), b, dv.length_squared(), sigma2)
             .map(|t| (t, Kind::Pair(Boundary::Inner)))
+    }
+
+    const PRUNES: bool = true;
+
+    /// Before the square root: with `a = σ² − r²` and `b = dr·dv < 0`,
+    /// `|dr + dv t|² − σ² ≥ 2 b t − a > 0` for every `t ≤ horizon` once `2 b · horizon > a`,
+    /// so the pair cannot touch before the horizon (Smallenburg's test).
+    #[inline(always)]
+    fn predict_before(&mut self, pair: &Pair, horizon: f64) -> Option<(f64, Kind)> {
+        let Pair { si, sj, dr, dv, .. } = *pair;
+        let b = dr.dot(dv);
+        if b >= 0.0 {
+            return None;
+        }
+        let sigma2 = self.contact2(si, sj);
+        let r2 = dr.length_squared();
+        if 2.0 * b * horizon > sigma2 - r2 {
+            return None;
+        }
+        enter_time(r2, b, dv.length_squared(), sigma2).map(|t| (t, Kind::Pair(Boundary::Inner)))
     }
 
     #[inline(always)]
@@ -453,7 +502,7 @@ impl PairModel for HardSpheres {
         let Pair { si, sj, dr, .. } = *pair;
         debug_assert_eq!(boundary, Boundary::Inner);
         let r2 = dr.length_squared();
-        let sigma2 = self.sigma2[si as usize * self.n_species + sj as usize];
+        let sigma2 = self.contact2(si, sj);
         let overlap = r2 < sigma2 * (1.0 - OVERLAP_TOLERANCE);
         if dr.dot(*vi - *vj) >= 0.0 {
             return Ok(Executed {
@@ -810,6 +859,49 @@ mod tests {
                 let t = exit_time(r2, b, v2, radius * radius).unwrap();
                 let w = w.unwrap();
                 prop_assert!((t - w.exit).abs() <= 1e-9 * (1.0 + t));
+            }
+        }
+    }
+
+    proptest! {
+        /// Pruning drops only events later than the horizon, and keeps the others exactly
+        /// (one species and a mixture, whose contact distances come from the table).
+        #[test]
+        fn hard_spheres_prune_only_beyond_the_horizon(
+            r in prop::array::uniform3(-2.5f64..2.5),
+            v in prop::array::uniform3(-2.0f64..2.0),
+            horizon in prop_oneof![0.0f64..2.0, Just(f64::INFINITY)],
+            mixture in any::<bool>(),
+        ) {
+            let (n, tables) = if mixture {
+                (2, vec![
+                    ((0, 0), vec![[1.0, f64::INFINITY]]),
+                    ((0, 1), vec![[0.8, f64::INFINITY]]),
+                    ((1, 1), vec![[0.6, f64::INFINITY]]),
+                ])
+            } else {
+                (1, vec![((0, 0), vec![[1.0, f64::INFINITY]])])
+            };
+            let particles = vec![Particle::new(1.0).unwrap(); n];
+            let mut model = HardSpheres::new(Potentials::from_tables(n, &tables), particles);
+            let pair = Pair {
+                i: 0,
+                j: 1,
+                si: 0,
+                sj: (n - 1) as u32,
+                now: 0.0,
+                dr: DVec3::from(r),
+                dv: DVec3::from(v),
+            };
+            let sigma = if mixture { 0.8 } else { 1.0 };
+            prop_assume!(pair.dr.length() > sigma);
+            let full = model.predict(&pair);
+            let pruned = model.predict_before(&pair, horizon);
+            match (full, pruned) {
+                (Some(a), Some(b)) => prop_assert_eq!(a, b),
+                (Some((t, _)), None) => prop_assert!(t > horizon, "dropped {t} ≤ {horizon}"),
+                (None, Some(b)) => prop_assert!(false, "pruned found {b:?}, full none"),
+                (None, None) => {}
             }
         }
     }

@@ -54,6 +54,20 @@ pub fn offsets(code: u32) -> [i32; 3] {
     [c % 3 - 1, (c / 3) % 3 - 1, c / 9 - 1]
 }
 
+/// The displacement of every image code for a box of `lengths`, indexed by code. The table
+/// has one slot per value of the 5-bit code field (the unused codes `27..32` hold zero), so an
+/// index taken from [`code`] needs no bounds check.
+pub fn shift_table(lengths: glam::DVec3) -> [glam::DVec3; 32] {
+    std::array::from_fn(|c| {
+        if c < 27 {
+            let o = offsets(c as u32);
+            glam::DVec3::new(f64::from(o[0]), f64::from(o[1]), f64::from(o[2])) * lengths
+        } else {
+            glam::DVec3::ZERO
+        }
+    })
+}
+
 /// Neighbour lists of all bodies, in fixed-stride storage (doubling when a list overflows).
 #[derive(Clone, Debug)]
 pub struct NeighbourLists {

@@ -282,10 +282,7 @@ where
         })?;
         let n_species = model.n_species() as u32;
         let masses: Vec<f64> = (0..n_species).map(|s| model.mass(s)).collect();
-        let shifts: [DVec3; 27] = std::array::from_fn(|c| {
-            let o = neighbour::offsets(c as u32);
-            DVec3::new(f64::from(o[0]), f64::from(o[1]), f64::from(o[2])) * state.lengths
-        });
+        let shifts = neighbour::shift_table(state.lengths);
         let mut sim = Simulation {
             blindfold: Blindfold::default(),
             sample_attitudes: false,
