@@ -37,6 +37,25 @@ pub struct Rdf {
 
 /// Index of the unordered pair of species `a ≤ b` among `kinds` species: `(0,0), (0,1), …,
 /// (0,k−1), (1,1), …`.
+/// The least-squares line `a + b t` through the second half of an MSD table's lags, as
+/// `(a, b)`: the fit behind [`Correlations::diffusion_from_msd`] (`D = b / 6`) and the line the
+/// MSD plot draws.
+pub(crate) fn msd_fit(t: &[(f64, f64)]) -> Option<(f64, f64)> {
+    let half = &t[t.len() / 2..];
+    if half.len() < 2 {
+        return None;
+    }
+    let n = half.len() as f64;
+    let mx = half.iter().map(|p| p.0).sum::<f64>() / n;
+    let my = half.iter().map(|p| p.1).sum::<f64>() / n;
+    let sxy: f64 = half.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    let sxx: f64 = half.iter().map(|p| (p.0 - mx).powi(2)).sum();
+    (sxx > 0.0).then(|| {
+        let b = sxy / sxx;
+        (my - b * mx, b)
+    })
+}
+
 fn pair_index(a: usize, b: usize, kinds: usize) -> usize {
     let (a, b) = if a <= b { (a, b) } else { (b, a) };
     // The pairs (i, ·) with i < a come first: k + (k − 1) + … + (k − a + 1) of them.
@@ -338,17 +357,7 @@ impl Correlations {
     /// Self-diffusion coefficient from the slope of the MSD over the second half of the lags
     /// (least squares), `D = slope / 6`.
     pub fn diffusion_from_msd(&self) -> Option<f64> {
-        let t = self.msd_table();
-        let half: Vec<(f64, f64)> = t[t.len() / 2..].to_vec();
-        if half.len() < 2 {
-            return None;
-        }
-        let n = half.len() as f64;
-        let mx = half.iter().map(|p| p.0).sum::<f64>() / n;
-        let my = half.iter().map(|p| p.1).sum::<f64>() / n;
-        let sxy: f64 = half.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
-        let sxx: f64 = half.iter().map(|p| (p.0 - mx).powi(2)).sum();
-        (sxx > 0.0).then(|| sxy / sxx / 6.0)
+        msd_fit(&self.msd_table()).map(|(_, slope)| slope / 6.0)
     }
 
     /// Self-diffusion coefficient from the Green–Kubo integral of the VACF (trapezoids),

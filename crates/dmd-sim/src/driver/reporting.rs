@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use crate::analysis::observable::Observers;
+use crate::analysis::observable::{Observers, msd_fit};
 use crate::analysis::output::{Line, Mean, OutputError, Plot, write_csv, write_plot};
 use crate::config::scene::{SceneError, UnitSystem};
 use crate::config::units::Units;
@@ -277,25 +277,6 @@ fn block_mean(x: &[f64]) -> Option<(f64, Option<f64>)> {
     }
     let b = crate::analysis::block::block_average(&finite);
     Some((b.mean, b.error.is_finite().then_some(b.error)))
-}
-
-/// The least-squares line `a + b t` through the second half of the MSD's lags (the fit of
-/// [`Correlations::diffusion_from_msd`](crate::analysis::observable::Correlations::diffusion_from_msd),
-/// `D = b / 6`).
-fn msd_fit(t: &[(f64, f64)]) -> Option<(f64, f64)> {
-    let half = &t[t.len() / 2..];
-    if half.len() < 2 {
-        return None;
-    }
-    let n = half.len() as f64;
-    let mx = half.iter().map(|p| p.0).sum::<f64>() / n;
-    let my = half.iter().map(|p| p.1).sum::<f64>() / n;
-    let sxy: f64 = half.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
-    let sxx: f64 = half.iter().map(|p| (p.0 - mx).powi(2)).sum();
-    (sxx > 0.0).then(|| {
-        let b = sxy / sxx;
-        (my - b * mx, b)
-    })
 }
 
 /// Writes the observables' CSV files and, with `plots`, their SVG plots (axes in the units of
