@@ -29,16 +29,17 @@ pub(crate) type Step = (
 /// Every CI step, in order.
 pub(crate) const STEPS: &[Step] = &[
     ("format", "cargo fmt --all -- --check", &[]),
+    // `validation` adds the `validate_*` examples, which `cargo test` does not build.
     (
         "lints",
-        "cargo clippy --workspace --all-targets -- -D warnings",
+        "cargo clippy --workspace --all-targets --features validation -- -D warnings",
         &[],
     ),
     // The gsd crate's tests exchange files with the reference Python package; dmd-sim's
-    // check that ASE reads its trajectories.
+    // check that ASE and OVITO's Python module read its trajectories.
     (
         "python packages",
-        "python3 -m pip install --quiet --disable-pip-version-check ase gsd numpy",
+        "python3 -m pip install --quiet --disable-pip-version-check ase gsd numpy ovito",
         &[],
     ),
     ("tests", TEST_COMMAND, &[]),

@@ -220,6 +220,7 @@ fn run_check(
     let output = Command::new("cargo")
         .current_dir(root)
         .args(["run", "--quiet", "--release", "--package", check.package])
+        .args(validation_feature(check.example))
         .args(["--example", check.example, "--"])
         .args(args)
         .arg("--figures")
@@ -233,6 +234,16 @@ fn run_check(
         eprintln!("!!! {} FAILED ({})", check.name, output.status);
     }
     Ok((output.status.success(), text))
+}
+
+/// The `validate_*` examples are built only with their crate's `validation` feature, which
+/// keeps them out of `cargo test`'s build; the other checked examples need no feature.
+fn validation_feature(example: &str) -> &'static [&'static str] {
+    if example.starts_with("validate_") {
+        &["--features", "validation"]
+    } else {
+        &[]
+    }
 }
 
 /// One line saying when, from which commit and in which mode a section was generated.
