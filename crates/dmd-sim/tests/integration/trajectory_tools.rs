@@ -1,12 +1,12 @@
 //! Trajectories other tools read, and runs that continue from any frame they hold:
-//! `trajectory.xyz` read by ASE (`ase.io.read(path, index=":")`) agrees with `trajectory.gsd`
-//! written at the same moments, for every body kind ASE types each line, gives the box and
-//! understands the velocities; a run started from a frame (`init.velocities = "file"`) starts
+//! `trajectory.xyz` read by ASE (`ase.io.read(path, index=":")`) and by OVITO's Python module
+//! agrees with `trajectory.gsd` written at the same moments, for every body kind ASE types each
+//! line, gives the box and understands the velocities; a run started from a frame (`init.velocities = "file"`) starts
 //! with that frame's kinetic energy, and its rows go to the bodies their ids name.
 //!
-//! The ASE checks need `python3` with `ase`, `gsd` and `numpy` (`python3 -m pip install ase gsd
-//! numpy`); without them they print why they skip and pass, unless the environment variable
-//! `CI` is set, where they fail.
+//! The Python checks need `python3` with `ase`, `ovito`, `gsd` and `numpy` (`python3 -m pip
+//! install ase ovito gsd numpy`); without them they print why they skip and pass, unless the
+//! environment variable `CI` is set, where they fail.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -161,6 +161,68 @@ fn ase_reads_a_rods_trajectory_as_the_gsd_file_has_it() {
         "18".to_owned(),
     ];
     let frames: u32 = python(ASE_AGAINST_GSD, &args).parse().unwrap();
+    assert!(frames >= 3, "{frames} frames");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// OVITO's Python module reads `trajectory.xyz` (first argument) as the GSD file (second) has
+/// it, frame by frame: box, ids, unwrapped positions (wrapped position plus `Periodic Image`),
+/// velocities, attitudes (OVITO's quaternions are x, y, z, w), the rods' semi-axes (`a a c`) and
+/// time (OVITO keeps shapes in single precision). Prints the number of frames.
+const OVITO_AGAINST_GSD: &str = r#"
+import sys, numpy as np, gsd.hoomd
+from ovito.io import import_file
+xyz, gsd_path = sys.argv[1], sys.argv[2]
+a, c = float(sys.argv[3]), float(sys.argv[4])
+pipeline = import_file(xyz)
+with gsd.hoomd.open(gsd_path, "r") as t:
+    assert pipeline.source.num_frames == len(t) >= 3, (pipeline.source.num_frames, len(t))
+    for k, f in enumerate(t):
+        d = pipeline.compute(k)
+        L = np.array(f.configuration.box[:3], dtype=float)
+        assert np.allclose(d.cell[:, :3], np.diag(L), rtol=1e-6), (k, d.cell[...])
+        assert d.cell.pbc == (True, True, True), k
+        assert abs(d.attributes["Time"] - float(f.log["dmd/time"][0])) < 1e-12, k
+        p = d.particles
+        assert p.count == f.particles.N, k
+        assert (np.asarray(p["Particle Identifier"]) == np.arange(p.count)).all(), k
+        u = np.asarray(p.positions) + np.asarray(p["Periodic Image"]) * L
+        ug = f.particles.position + f.particles.image * L
+        assert np.abs(u - ug).max() < 1e-5 * L.max(), (k, np.abs(u - ug).max())
+        assert np.allclose(p["Velocity"], f.particles.velocity, rtol=1e-5, atol=1e-5), k
+        q = np.asarray(p["Orientation"])[:, [3, 0, 1, 2]]
+        assert np.abs(q - f.particles.orientation).max() < 1e-6, k
+        assert np.allclose(p["Aspherical Shape"], [a, a, c], rtol=1e-6), k
+print(pipeline.source.num_frames)
+"#;
+
+/// OVITO's Python module (`pip install ovito`) reads a rods trajectory with its box, velocities,
+/// attitudes, shapes and image counters. Skips where the module does not import, except under
+/// CI, whose Python packages include it.
+#[test]
+fn ovito_reads_a_rods_trajectory_as_the_gsd_file_has_it() {
+    let test = "ovito_reads_a_rods_trajectory_as_the_gsd_file_has_it";
+    let ready = Command::new("python3")
+        .args(["-c", "import ovito.io, gsd.hoomd, numpy"])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !ready {
+        let why = "python3 cannot `import ovito.io, gsd.hoomd, numpy` (install them with \
+                   `python3 -m pip install ovito gsd numpy`)";
+        assert!(std::env::var_os("CI").is_none(), "{test}: {why}");
+        eprintln!("SKIPPED {test}: {why}");
+        return;
+    }
+    let d = dir("ovito-rods");
+    run_scene(&rods(&[]), Path::new("."), Some(&d), &mut Quiet).unwrap();
+    let (sigma, zeta) = (3.035, 1.0);
+    let args = [
+        d.join("trajectory.xyz").display().to_string(),
+        d.join("trajectory.gsd").display().to_string(),
+        format!("{:e}", 0.5 * (sigma - 0.5 * zeta)),
+        format!("{:e}", 0.5 * (sigma + 0.5 * zeta)),
+    ];
+    let frames: u32 = python(OVITO_AGAINST_GSD, &args).parse().unwrap();
     assert!(frames >= 3, "{frames} frames");
     let _ = std::fs::remove_dir_all(&d);
 }
