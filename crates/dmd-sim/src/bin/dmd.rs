@@ -19,6 +19,7 @@ use dmd_sim::run::{PhaseEnd, Reporter, RunOptions, RunPlan, Summary, run_scene_w
 use dmd_sim::scene::{Scene, UnitSystem};
 use dmd_sim::simulation::{Progress, Stop};
 use dmd_sim::smd_engine::{self, Engine, SmdSummary};
+use dmd_sim::units::UnitNames;
 use indicatif::{ProgressBar, ProgressStyle};
 
 /// The `dmd` command.
@@ -118,55 +119,6 @@ enum Command {
 
 /// The widest line of the header and the summary (the progress bar fits the terminal).
 const COLUMNS: usize = 100;
-
-/// The names of the scene's units on the terminal.
-struct Names {
-    length: &'static str,
-    time: &'static str,
-    energy: &'static str,
-    temperature: &'static str,
-    pressure: &'static str,
-    density: &'static str,
-    diffusion: &'static str,
-    /// The unit system in a few words, for the header.
-    system: &'static str,
-}
-
-impl Names {
-    fn of(units: UnitSystem) -> Self {
-        match units {
-            UnitSystem::Molecular => Names {
-                length: "Å",
-                time: "ps",
-                energy: "kJ/mol",
-                temperature: "K",
-                pressure: "bar",
-                density: "Å⁻³",
-                diffusion: "Å²/ps",
-                system: "molecular units (Å, ps, kJ/mol, K, bar)",
-            },
-            UnitSystem::Reduced => Names {
-                length: "σ",
-                time: "τ",
-                energy: "ε",
-                temperature: "ε/k_B",
-                pressure: "ε/σ³",
-                density: "σ⁻³",
-                diffusion: "σ²/τ",
-                system: "reduced units (length σ, energy ε, k_B = 1, time τ = σ√(m/ε))",
-            },
-        }
-    }
-
-    /// The names of a summary's `units`.
-    fn of_summary(units: &str) -> Self {
-        Names::of(if units == "molecular" {
-            UnitSystem::Molecular
-        } else {
-            UnitSystem::Reduced
-        })
-    }
-}
 
 /// `x` to `digits` significant digits: plain between 10⁻³ and 10⁶, else in scientific notation.
 fn sig(x: f64, digits: usize) -> String {
@@ -336,7 +288,7 @@ impl Terminal {
     fn message(&self, p: Progress) -> Option<(u64, String)> {
         let (name, length, started) = self.phase.as_ref()?;
         let wall = started.elapsed().as_secs_f64().max(1e-9);
-        let time = Names::of(self.units).time;
+        let time = UnitNames::of(self.units).time;
         let per_hour = format!("{} {time}/h", sig(p.elapsed / wall * 3600.0, 3));
         let what = if self.engine == "smd" {
             "steps"
@@ -380,7 +332,7 @@ impl Reporter for Terminal {
     fn start(&mut self, plan: &RunPlan) {
         self.units = plan.units;
         self.engine = plan.engine;
-        let u = Names::of(plan.units);
+        let u = UnitNames::of(plan.units);
         println!(
             "dmd: {} {}, output in {}",
             if plan.resumed_in.is_some() {
@@ -505,7 +457,7 @@ impl Reporter for Terminal {
 }
 
 /// The equilibration line of a summary: its length, cost and end temperature.
-fn print_equilibration(terminal: Option<&Terminal>, events: u64, what: &str, u: &Names) {
+fn print_equilibration(terminal: Option<&Terminal>, events: u64, what: &str, u: &UnitNames) {
     match terminal.and_then(|t| t.equilibration) {
         Some((end, wall)) => line(
             "equilibration",
@@ -528,7 +480,7 @@ fn print_equilibration(terminal: Option<&Terminal>, events: u64, what: &str, u: 
 }
 
 fn print_summary(s: &Summary, out: &Path, terminal: Option<&Terminal>) {
-    let u = Names::of_summary(&s.units);
+    let u = UnitNames::of_summary(&s.units);
     println!(
         "dmd: done: {} bodies ({}), ρ = {} {}",
         count(s.n_bodies),
@@ -536,7 +488,7 @@ fn print_summary(s: &Summary, out: &Path, terminal: Option<&Terminal>) {
         sig(s.density, 4),
         u.density
     );
-    print_equilibration(terminal, s.equilibration_events, "events", &u);
+    print_equilibration(terminal, s.equilibration_events, "events", u);
     line(
         "production",
         &format!(
@@ -655,7 +607,7 @@ fn print_summary(s: &Summary, out: &Path, terminal: Option<&Terminal>) {
         checks.push(format!("largest relative bond error {b:.1e}"));
     }
     list("checks", &checks);
-    print_diffusion(s.diffusion_msd, s.diffusion_vacf, &u);
+    print_diffusion(s.diffusion_msd, s.diffusion_vacf, u);
     if let Some(h) = &s.hmc {
         line(
             "hmc",
@@ -697,7 +649,7 @@ fn print_summary(s: &Summary, out: &Path, terminal: Option<&Terminal>) {
 }
 
 /// The diffusion coefficients a run measured.
-fn print_diffusion(msd: Option<f64>, vacf: Option<f64>, u: &Names) {
+fn print_diffusion(msd: Option<f64>, vacf: Option<f64>, u: &UnitNames) {
     let mut d = Vec::new();
     if let Some(x) = msd {
         d.push(format!("{} {} (MSD)", sig(x, 4), u.diffusion));
@@ -718,7 +670,7 @@ fn print_wrote(out: &Path, files: &[String]) {
 }
 
 fn print_smd_summary(s: &SmdSummary, out: &Path, terminal: Option<&Terminal>) {
-    let u = Names::of_summary(&s.units);
+    let u = UnitNames::of_summary(&s.units);
     println!(
         "dmd: done (engine smd, standard MD): {} bodies ({}), ρ = {} {}",
         count(s.n_bodies),
@@ -726,7 +678,7 @@ fn print_smd_summary(s: &SmdSummary, out: &Path, terminal: Option<&Terminal>) {
         sig(s.density, 4),
         u.density
     );
-    print_equilibration(terminal, s.equilibration_steps, "steps", &u);
+    print_equilibration(terminal, s.equilibration_steps, "steps", u);
     line(
         "production",
         &format!(
@@ -818,7 +770,7 @@ fn print_smd_summary(s: &SmdSummary, out: &Path, terminal: Option<&Terminal>) {
             ),
         ],
     );
-    print_diffusion(s.diffusion_msd, s.diffusion_vacf, &u);
+    print_diffusion(s.diffusion_msd, s.diffusion_vacf, u);
     if !s.ignored_keys.is_empty() {
         let mut keys = vec![format!(
             "ignored (event-driven only): {}",
@@ -1235,7 +1187,7 @@ fn print_ensemble(e: &dmd_sim::chains::Ensemble, out: &Path) {
         .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
         .and_then(|v| v["units"].as_str().map(str::to_owned))
         .unwrap_or_default();
-    let u = Names::of_summary(&units);
+    let u = UnitNames::of_summary(&units);
     let rate = format!("per {}", u.time);
     println!(
         "dmd: {} point(s) × {} chain(s){}",

@@ -68,12 +68,84 @@ impl Units {
         }
     }
 
-    /// Names of the reported units: `(length, time, energy, temperature, pressure)`.
-    pub fn names(&self) -> [&'static str; 5] {
-        match self.system {
-            UnitSystem::Reduced => ["reduced"; 5],
-            UnitSystem::Molecular => ["Å", "ps", "kJ/mol", "K", "bar"],
+    /// Names of the units a person reads (terminal, plots).
+    pub fn names(&self) -> &'static UnitNames {
+        UnitNames::of(self.system)
+    }
+}
+
+/// Names of the units of reported numbers, as the terminal and the plots print them: molecular
+/// units by name, reduced units in σ (length), ε (energy), k_B = 1 and τ = σ√(m/ε) (time).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct UnitNames {
+    /// Length: `Å` or `σ`.
+    pub length: &'static str,
+    /// Time: `ps` or `τ`.
+    pub time: &'static str,
+    /// Energy: `kJ/mol` or `ε`.
+    pub energy: &'static str,
+    /// Temperature: `K` or `ε/k_B`.
+    pub temperature: &'static str,
+    /// Pressure: `bar` or `ε/σ³`.
+    pub pressure: &'static str,
+    /// Number density: `Å⁻³` or `σ⁻³`.
+    pub density: &'static str,
+    /// Area (mean squared displacement): `Å²` or `σ²`.
+    pub area: &'static str,
+    /// Diffusion coefficient: `Å²/ps` or `σ²/τ`.
+    pub diffusion: &'static str,
+    /// Velocity squared (velocity autocorrelation): `Å²/ps²` or `σ²/τ²`.
+    pub speed_squared: &'static str,
+    /// The system in a few words, for a header.
+    pub system: &'static str,
+    /// Whether these are reduced units.
+    pub reduced: bool,
+}
+
+impl UnitNames {
+    const MOLECULAR: UnitNames = UnitNames {
+        length: "Å",
+        time: "ps",
+        energy: "kJ/mol",
+        temperature: "K",
+        pressure: "bar",
+        density: "Å⁻³",
+        area: "Å²",
+        diffusion: "Å²/ps",
+        speed_squared: "Å²/ps²",
+        system: "molecular units (Å, ps, kJ/mol, K, bar)",
+        reduced: false,
+    };
+
+    const REDUCED: UnitNames = UnitNames {
+        length: "σ",
+        time: "τ",
+        energy: "ε",
+        temperature: "ε/k_B",
+        pressure: "ε/σ³",
+        density: "σ⁻³",
+        area: "σ²",
+        diffusion: "σ²/τ",
+        speed_squared: "σ²/τ²",
+        system: "reduced units (length σ, energy ε, k_B = 1, time τ = σ√(m/ε))",
+        reduced: true,
+    };
+
+    /// The names of `system`.
+    pub fn of(system: UnitSystem) -> &'static UnitNames {
+        match system {
+            UnitSystem::Molecular => &Self::MOLECULAR,
+            UnitSystem::Reduced => &Self::REDUCED,
         }
+    }
+
+    /// The names of a summary's `units` field (`"molecular"` or `"reduced"`).
+    pub fn of_summary(units: &str) -> &'static UnitNames {
+        Self::of(if units == "molecular" {
+            UnitSystem::Molecular
+        } else {
+            UnitSystem::Reduced
+        })
     }
 }
 

@@ -6,7 +6,7 @@ use std::path::Path;
 use crate::analysis::observable::{Observers, msd_fit};
 use crate::analysis::output::{Line, Mean, OutputError, Plot, write_csv, write_plot};
 use crate::config::scene::{SceneError, UnitSystem};
-use crate::config::units::Units;
+use crate::config::units::{UnitNames, Units};
 use crate::driver::checkpoint::CheckpointError;
 use crate::engine::simulation::{Progress, SimError, Stop};
 
@@ -113,17 +113,6 @@ pub trait Reporter {
 pub struct Quiet;
 impl Reporter for Quiet {}
 
-/// Names of the units of a summary's `units` (`reduced` or `molecular`): `(length, time,
-/// energy, temperature, pressure)`, as [`Units::names`].
-pub fn unit_names(units: &str) -> [&'static str; 5] {
-    let system = if units == "molecular" {
-        crate::config::scene::UnitSystem::Molecular
-    } else {
-        crate::config::scene::UnitSystem::Reduced
-    };
-    Units::of(system).names()
-}
-
 /// CPU time of the calling thread, from `/proc/thread-self/schedstat` (Linux).
 pub fn thread_cpu_seconds() -> Option<f64> {
     let text = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
@@ -157,7 +146,7 @@ pub(crate) struct PlotInfo {
 impl PlotInfo {
     /// The system, with its scene and the units in `names`: `rods-paper: N = 512, T = 530.5 K,
     /// ρ = 0.01789 Å⁻³, ΔV = 2.1 kJ/mol`.
-    fn caption(&self, names: &AxisUnits) -> String {
+    fn caption(&self, names: &UnitNames) -> String {
         let mut text = match &self.scene {
             Some(s) => format!("{s}: "),
             None => String::new(),
@@ -193,50 +182,6 @@ pub(crate) fn terrace_step(scene: &crate::config::scene::Scene, units: &Units) -
     steps
         .all(|s| s == Some(first))
         .then(|| units.energy_out(first))
-}
-
-/// The units axis labels carry: molecular units by name, reduced units in σ (length), ε
-/// (energy) and τ = σ√(m/ε) (time).
-struct AxisUnits {
-    length: &'static str,
-    time: &'static str,
-    energy: &'static str,
-    temperature: &'static str,
-    pressure: &'static str,
-    density: &'static str,
-    area: &'static str,
-    diffusion: &'static str,
-    speed_squared: &'static str,
-    reduced: bool,
-}
-
-fn axis_units(units: &Units) -> AxisUnits {
-    match units.system {
-        crate::config::scene::UnitSystem::Molecular => AxisUnits {
-            length: "Å",
-            time: "ps",
-            energy: "kJ/mol",
-            temperature: "K",
-            pressure: "bar",
-            density: "Å⁻³",
-            area: "Å²",
-            diffusion: "Å²/ps",
-            speed_squared: "Å²/ps²",
-            reduced: false,
-        },
-        crate::config::scene::UnitSystem::Reduced => AxisUnits {
-            length: "σ",
-            time: "τ",
-            energy: "ε",
-            temperature: "ε/k_B",
-            pressure: "ε/σ³",
-            density: "σ⁻³",
-            area: "σ²",
-            diffusion: "σ²/τ",
-            speed_squared: "σ²/τ²",
-            reduced: true,
-        },
-    }
 }
 
 /// `x` with four significant digits (`530.5`, `0.01789`, `1312`), in e-notation when very
@@ -289,8 +234,8 @@ pub(crate) fn write_observables(
     info: &PlotInfo,
 ) -> Result<Vec<String>, OutputError> {
     let mut files = Vec::new();
-    let au = axis_units(units);
-    let caption = info.caption(&au);
+    let au = units.names();
+    let caption = info.caption(au);
     let plot = |title: &str, x: String, y: String, curves: Vec<Line>| Plot {
         title: title.to_owned(),
         caption: caption.clone(),
@@ -468,7 +413,7 @@ pub(crate) fn write_observables(
         )?;
         if plots {
             let x_label = format!("t ({})", au.time);
-            if let Some(p) = energy_plot(&rows, info, &au) {
+            if let Some(p) = energy_plot(&rows, info, au) {
                 let p = plot(p.0, x_label.clone(), p.1, p.2);
                 let path = dir.join("series-energy.svg");
                 write_plot(&path, &p)?;
@@ -518,7 +463,7 @@ pub(crate) fn write_observables(
 fn energy_plot(
     rows: &[crate::analysis::observable::SeriesRow],
     info: &PlotInfo,
-    au: &AxisUnits,
+    au: &UnitNames,
 ) -> Option<(&'static str, String, Vec<Line>)> {
     let n = info.n.max(1) as f64;
     let column = |f: fn(&crate::analysis::observable::SeriesRow) -> f64| -> Vec<f64> {

@@ -37,7 +37,7 @@ use crate::driver::checkpoint::{
 };
 use crate::driver::hmc::{Acceptance, Chain, Ensemble, HmcSettings, HmcSummary};
 pub use crate::driver::reporting::{
-    PhaseEnd, Quiet, Reporter, RunError, RunPlan, thread_cpu_seconds, unit_names,
+    PhaseEnd, Quiet, Reporter, RunError, RunPlan, thread_cpu_seconds,
 };
 use crate::driver::reporting::{PlotInfo, terrace_step, write_observables};
 use crate::engine::model::{HardSpheres, PairModel, Stepped};
