@@ -320,6 +320,26 @@ impl System {
         &self.pos
     }
 
+    /// Sets the integral image counters per body (unwrapped = position + image ∘ L), for a
+    /// run that continues another's unwrapped positions.
+    ///
+    /// # Errors
+    /// [`SmdError::Inconsistent`] unless there is one per body.
+    pub fn set_images(&mut self, images: &[[i32; 3]]) -> Result<(), SmdError> {
+        if images.len() != self.pos.len() {
+            return Err(SmdError::Inconsistent(format!(
+                "{} image counters for {} bodies",
+                images.len(),
+                self.pos.len()
+            )));
+        }
+        self.image = images
+            .iter()
+            .map(|m| DVec3::new(m[0].into(), m[1].into(), m[2].into()))
+            .collect();
+        Ok(())
+    }
+
     /// The position of body `i` without periodic wrapping (continuous in time).
     #[inline]
     pub fn unwrapped(&self, i: usize) -> DVec3 {

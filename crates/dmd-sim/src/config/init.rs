@@ -421,7 +421,13 @@ pub struct FileMotion {
     pub velocities: Vec<DVec3>,
     /// Lab angular velocities, the `omega:R:3` column (1/time), when asked for.
     pub omegas: Option<Vec<DVec3>>,
+    /// Periodic images, the `map_shift:I:3` column, when the file has one: a run continues the
+    /// file's unwrapped positions (`pos + map_shift · L`) instead of counting from zero.
+    pub images: Option<Vec<[i32; 3]>>,
 }
+
+/// Largest image counter a start file may give (a body ~10⁹ boxes from where it started).
+const MAX_IMAGE: f64 = 1e9;
 
 /// Reads the velocities (and with `rotating` the lab angular velocities) of the `n` bodies of
 /// the frame `init.frame` of `init.file`, in the units `dmd` writes them; the masses of the
@@ -473,7 +479,43 @@ pub fn read_motion(
             }
         }
     }
-    Ok(FileMotion { velocities, omegas })
+    let images = match column(frame.comment, "map_shift", 3).map_err(&err)? {
+        Some(at) => {
+            let rows = numbers(&frame, at, 3)
+                .map_err(|line| err(format!("line {line}: expected three image counters")))?;
+            let mut images = Vec::with_capacity(rows.len());
+            for (v, (line, _)) in rows.iter().zip(&frame.rows) {
+                if v.iter().any(|x| x.fract() != 0.0 || x.abs() > MAX_IMAGE) {
+                    return Err(err(format!(
+                        "line {line}: map_shift must be three whole numbers of at most {MAX_IMAGE:e} \
+                         in size"
+                    )));
+                }
+                images.push([v[0] as i32, v[1] as i32, v[2] as i32]);
+            }
+            Some(images)
+        }
+        None => None,
+    };
+    Ok(FileMotion {
+        velocities,
+        omegas,
+        images,
+    })
+}
+
+/// The image counters of bodies that start at `positions` (as a file gives them) with the
+/// file's `images`, once the event-driven engine has wrapped the positions into `[0, L)`: the
+/// boxes a position lies outside are added, so that the unwrapped positions are the file's.
+pub fn wrapped_images(images: &[[i32; 3]], positions: &[DVec3], lengths: DVec3) -> Vec<[i32; 3]> {
+    images
+        .iter()
+        .zip(positions)
+        .map(|(im, p)| {
+            let k = (*p / lengths).floor();
+            [im[0] + k.x as i32, im[1] + k.y as i32, im[2] + k.z as i32]
+        })
+        .collect()
 }
 
 /// The box of an extended-XYZ comment line (orthorhombic lattices only).

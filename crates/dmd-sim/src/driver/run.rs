@@ -304,6 +304,10 @@ pub fn run_scene_with(
         Some(m) => m.velocities.clone(),
         None => maxwell_boltzmann(&masses, scene.init.temperature, scene.seed),
     };
+    let images = motion
+        .as_ref()
+        .and_then(|m| m.images.as_deref())
+        .map(|im| crate::config::init::wrapped_images(im, &config.positions, config.lengths));
     let omegas = motion.and_then(|m| m.omegas);
     let n = config.positions.len();
     let hard = matches!(&plan, Plan::Spheres(p) if p.all_hard_spheres());
@@ -339,6 +343,7 @@ pub fn run_scene_with(
         scene,
         config: &config,
         velocities: &velocities,
+        images,
         settings,
         out,
         units,
@@ -608,6 +613,8 @@ struct Context<'a> {
     scene: &'a Scene,
     config: &'a Configuration,
     velocities: &'a [DVec3],
+    /// A start file's image counters (`map_shift`), which the run continues.
+    images: Option<Vec<[i32; 3]>>,
     settings: LoopSettings,
     out: Option<&'a Path>,
     units: Units,
@@ -689,7 +696,7 @@ impl Context<'_> {
         reporter: &mut dyn Reporter,
     ) -> Result<Summary, RunError> {
         let scene = self.scene;
-        // Issue 9: a resumed run starts from its checkpoint's state and stage.
+        // A resumed run starts from its checkpoint's state and stage.
         let resume = self.options.resume.as_ref();
         let mut sim: Simulation<M, Q> = match resume {
             Some((path, c)) => {
@@ -708,6 +715,9 @@ impl Context<'_> {
             )
             .map_err(|e| setup_error(scene, self.config, &self.units, e))?,
         };
+        if let (None, Some(images)) = (resume, &self.images) {
+            sim.set_images(images.clone());
+        }
         let fault = scene.hmc.as_ref().map_or(0.0, |h| h.fault_fraction);
         if fault > 0.0 {
             sim.set_fault_fraction(fault, scene.seed);

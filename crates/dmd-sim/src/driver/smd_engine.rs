@@ -291,6 +291,7 @@ pub fn run_named(
         Some(m) => m.velocities.clone(),
         None => maxwell_boltzmann(&masses, kt, scene.seed),
     };
+    let file_images = motion.as_ref().and_then(|m| m.images.clone());
     let file_omegas = motion.and_then(|m| m.omegas);
     let (body, orientations, ang_mom) = if pot.is_rigid() {
         let moments = species.moments.expect("checked: tops have moments");
@@ -345,7 +346,7 @@ pub fn run_named(
             Vec::new(),
         )
     };
-    let system = System::from_parts(
+    let mut system = System::from_parts(
         config.lengths,
         body,
         config.positions.clone(),
@@ -354,6 +355,10 @@ pub fn run_named(
         ang_mom,
     )
     .map_err(smd_error)?;
+    // smd wraps the file's positions itself, counting the crossing in the images.
+    if let Some(images) = file_images {
+        system.set_images(&images).map_err(smd_error)?;
+    }
     if let Some(dir) = out {
         std::fs::create_dir_all(dir).map_err(|e| OutputError {
             path: dir.to_owned(),

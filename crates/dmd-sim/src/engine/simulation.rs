@@ -1594,6 +1594,13 @@ where
         &self.images
     }
 
+    /// Sets the box crossings per body, for a run that continues another's unwrapped
+    /// positions. Panics unless there is one per body.
+    pub fn set_images(&mut self, images: Vec<[i32; 3]>) {
+        assert_eq!(images.len(), self.images.len(), "one image per body");
+        self.images = images;
+    }
+
     /// Masses per species.
     pub fn masses(&self) -> &[f64] {
         &self.masses

@@ -361,6 +361,28 @@ fn last_frame(path: &Path) -> (String, Vec<Vec<String>>) {
     (lines[last + 1].to_owned(), rows)
 }
 
+/// The comment line and the rows, split into words, of the first frame of `path`.
+fn first_frame(path: &Path) -> (String, Vec<Vec<String>>) {
+    let text = std::fs::read_to_string(path).unwrap();
+    let n: usize = text.lines().next().unwrap().trim().parse().unwrap();
+    let comment = text.lines().nth(1).unwrap().to_owned();
+    let rows = text
+        .lines()
+        .skip(2)
+        .take(n)
+        .map(|l| l.split_whitespace().map(str::to_owned).collect())
+        .collect();
+    (comment, rows)
+}
+
+/// The `map_shift` image counters of a frame's rows.
+fn images(comment: &str, rows: &[Vec<String>]) -> Vec<[i64; 3]> {
+    let at = column(comment, "map_shift");
+    rows.iter()
+        .map(|r| std::array::from_fn(|k| r[at + k].parse().unwrap()))
+        .collect()
+}
+
 /// The first word of column `name` in a comment line's `Properties`.
 fn column(comment: &str, name: &str) -> usize {
     let props = comment
@@ -494,6 +516,12 @@ fn a_run_of_spheres_continues_from_its_last_frame() {
     close(first_kinetic(&second), k, "kinetic energy at t = 0");
     // Drawn velocities at init.temperature would give (3N − 3)/2 kT.
     assert!((k - 0.5 * (3.0 * 256.0 - 3.0)).abs() > 1e-3 * k, "{k}");
+    // The image counters go on from the frame's: unwrapped positions continue.
+    let (c1, a) = last_frame(&xyz);
+    let (c2, b) = first_frame(&second.join("trajectory.xyz"));
+    let (was, now) = (images(&c1, &a), images(&c2, &b));
+    assert!(was.iter().any(|m| *m != [0; 3]), "no body crossed the box");
+    assert_eq!(was, now);
     let _ = std::fs::remove_dir_all(&d);
 }
 
@@ -511,16 +539,11 @@ fn a_run_of_rods_continues_from_its_last_frame_on_both_engines() {
     let second = d.join("second");
     let s2 = run_scene(&rods(&refs), Path::new("."), Some(&second), &mut Quiet).unwrap();
     close(first_kinetic(&second), k, "kinetic energy at t = 0");
-    // The frame's attitudes too: the second run's first frame is the first run's last.
+    // The frame's attitudes and images too: the second run's first frame is the first run's
+    // last.
     let (c1, a) = last_frame(&xyz);
-    let text = std::fs::read_to_string(second.join("trajectory.xyz")).unwrap();
-    let n: usize = text.lines().next().unwrap().parse().unwrap();
-    let b: Vec<Vec<String>> = text
-        .lines()
-        .skip(2)
-        .take(n)
-        .map(|l| l.split_whitespace().map(str::to_owned).collect())
-        .collect();
+    let (c2, b) = first_frame(&second.join("trajectory.xyz"));
+    assert_eq!(images(&c1, &a), images(&c2, &b));
     let q = column(&c1, "orientation");
     for (x, y) in a.iter().zip(&b) {
         for c in 0..4 {
@@ -539,6 +562,8 @@ fn a_run_of_rods_continues_from_its_last_frame_on_both_engines() {
     let third = d.join("smd");
     smd_engine::run(&scene, Path::new("."), Some(&third)).unwrap_or_else(|e| panic!("{e}"));
     close(first_kinetic(&third), k, "smd: kinetic energy at t = 0");
+    let (c3, b3) = first_frame(&third.join("trajectory.xyz"));
+    assert_eq!(images(&c1, &a), images(&c3, &b3), "smd: image counters");
     let _ = std::fs::remove_dir_all(&d);
 }
 
