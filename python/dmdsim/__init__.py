@@ -49,7 +49,10 @@ Overrides = Union[None, Sequence[str], Mapping[str, Any]]
 
 
 def _toml_value(v: Any) -> str:
-    """A Python value as the TOML text of an override's VALUE."""
+    """A Python value as the TOML text of an override's VALUE (``None``: none, which removes
+    the key as ``--set KEY=`` does)."""
+    if v is None:
+        return ""
     if isinstance(v, bool):
         return "true" if v else "false"
     if isinstance(v, (int, np.integer)):
@@ -101,7 +104,8 @@ def load(scene: SceneLike, set: Overrides = None) -> Simulation:
     """The simulation of ``scene`` in its initial state, as ``dmd run`` starts it.
 
     ``scene`` is a path to a TOML file, TOML text or a dict; ``set`` overrides keys like
-    ``dmd run --set`` (a list of ``"KEY=VALUE"`` or a dict ``{"KEY": value}``). Raises
+    ``dmd run --set`` (a list of ``"KEY=VALUE"`` or a dict ``{"KEY": value}``, where the value
+    ``None`` removes the key). Raises
     :class:`SceneError` with the ``dmd`` command's message for a scene it refuses.
     """
     text, base, file = _source(scene)

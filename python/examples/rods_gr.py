@@ -28,9 +28,9 @@ summary = dmdsim.run(
         "run.equilibration_time": 2.0,  # ps
         "run.time": 4.0,  # ps
         # g(r) only: the time correlations need longer runs.
-        "output.msd": "",
-        "output.vacf": "",
-        "output.orientation_acf": "",
+        "output.msd": None,
+        "output.vacf": None,
+        "output.orientation_acf": None,
     },
     force=True,
 )

@@ -305,6 +305,7 @@ impl Simulation {
 
 #[pymethods]
 impl Simulation {
+    /// The simulation of a scene's TOML text with `--set` overrides (use `dmdsim.load`).
     #[new]
     #[pyo3(signature = (text, overrides, base, file))]
     fn new(
@@ -332,6 +333,7 @@ impl Simulation {
         })
     }
 
+    /// The simulation saved by `checkpoint` in `path`; continues it bit for bit.
     #[staticmethod]
     fn resume(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
         let c = checkpoint::read(&path).map_err(|e| CheckpointError::new_err(e.to_string()))?;
@@ -353,6 +355,8 @@ impl Simulation {
         })
     }
 
+    /// Runs `events` more events or `time` more simulated time (exactly one), GIL released;
+    /// Ctrl-C raises `KeyboardInterrupt` and leaves the state whole.
     #[pyo3(signature = (events=None, time=None))]
     fn advance(&self, py: Python<'_>, events: Option<u64>, time: Option<f64>) -> PyResult<()> {
         let stop = match (events, time) {
@@ -376,6 +380,7 @@ impl Simulation {
         watch.finish(result)
     }
 
+    /// Re-bases the time origin and writes the state to `path` (dmd's checkpoint format).
     fn checkpoint(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
         let mut guard = self.engine()?;
         let engine: &mut Box<dyn Engine> = &mut guard;
@@ -387,21 +392,25 @@ impl Simulation {
         .map_err(|e| CheckpointError::new_err(e.to_string()))
     }
 
+    /// Number of bodies.
     #[getter]
     fn n(&self) -> PyResult<usize> {
         Ok(self.engine()?.n())
     }
 
+    /// Simulated time since the start (time unit or ps).
     #[getter]
     fn time(&self) -> PyResult<f64> {
         Ok(self.engine()?.time())
     }
 
+    /// Events executed since the start.
     #[getter]
     fn events(&self) -> PyResult<u64> {
         Ok(self.engine()?.counters().events)
     }
 
+    /// `"reduced"` or `"molecular"`.
     #[getter]
     fn units(&self) -> PyResult<&'static str> {
         Ok(match self.engine()?.built().units.system {
@@ -410,37 +419,44 @@ impl Simulation {
         })
     }
 
+    /// The interaction model, as the summary's `model`.
     #[getter]
     fn model(&self) -> PyResult<&'static str> {
         Ok(self.engine()?.built().model)
     }
 
+    /// Names of the species, indexed by `species`.
     #[getter]
     fn species_names(&self) -> PyResult<Vec<String>> {
         Ok(self.engine()?.built().species.clone())
     }
 
+    /// Box edge lengths, shape (3,).
     #[getter]
     fn box_lengths<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let l = self.engine()?.lengths().to_array().to_vec();
         Ok(Array1::from_vec(l).into_pyarray(py))
     }
 
+    /// Centres of mass now, wrapped into [0, L), shape (N, 3).
     #[getter]
     fn positions<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         Ok(vectors(py, &self.engine()?.positions()))
     }
 
+    /// Centres of mass now, continuous across box faces, shape (N, 3).
     #[getter]
     fn unwrapped_positions<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         Ok(vectors(py, &self.engine()?.unwrapped_positions()))
     }
 
+    /// Centre-of-mass velocities, shape (N, 3).
     #[getter]
     fn velocities<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         Ok(vectors(py, &self.engine()?.velocities()))
     }
 
+    /// Species index of each body, shape (N,), int64.
     #[getter]
     fn species<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<i64>>> {
         let s: Vec<i64> = self
@@ -452,6 +468,8 @@ impl Simulation {
         Ok(Array1::from_vec(s).into_pyarray(py))
     }
 
+    /// Attitudes now, unit quaternions (w, x, y, z) from body to lab frame, shape (N, 4);
+    /// identity for bodies without one (spheres, semi-flexible molecules).
     #[getter]
     fn quaternions<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let q = self.engine()?.attitudes();
@@ -467,6 +485,7 @@ impl Simulation {
             .into_pyarray(py))
     }
 
+    /// Lab angular velocities now, shape (N, 3); zero for bodies without an attitude.
     #[getter]
     fn angular_velocities<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let engine = self.engine()?;
@@ -491,6 +510,7 @@ impl Simulation {
         Ok(vectors(py, &omegas))
     }
 
+    /// Time, events, energies and temperature now, in the scene's units.
     fn state<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let engine = self.engine()?;
         let u = engine.built().units;

@@ -116,6 +116,14 @@ def test_a_checkpoint_that_is_not_one_raises(tmp_path):
         dmdsim.resume(bad)
 
 
+def dmd_command():
+    """The `dmd` command of this clone's build, if it is built."""
+    target = Path(os.environ.get("CARGO_TARGET_DIR", ROOT / "target"))
+    return next(
+        (p for p in [target / "debug" / "dmd", target / "release" / "dmd"] if p.exists()), None
+    )
+
+
 def test_a_bad_key_raises_scene_error_with_the_commands_message(tmp_path):
     scene = hard_spheres()
     scene["box"] = {"densty": 0.5}
@@ -124,8 +132,7 @@ def test_a_bad_key_raises_scene_error_with_the_commands_message(tmp_path):
     assert isinstance(e.value, dmdsim.DmdError)
     assert "densty" in str(e.value)
     # The same text as `dmd run` prints after `dmd: FILE: `, when the command is built.
-    target = Path(os.environ.get("CARGO_TARGET_DIR", ROOT / "target"))
-    dmd = next((p for p in [target / "debug" / "dmd", target / "release" / "dmd"] if p.exists()), None)
+    dmd = dmd_command()
     if dmd is None:
         pytest.skip("the dmd command is not built")
     file = tmp_path / "bad.toml"
@@ -175,6 +182,45 @@ def test_run_returns_the_summary_and_writes_the_commands_files(tmp_path):
     again = dmdsim.run(scene)
     for key in ["events", "sim_time", "pressure", "energy_total_end"]:
         assert again[key] == summary[key]
+
+
+TIMINGS = {
+    "wall_seconds",
+    "cpu_seconds",
+    "events_per_second",
+    "events_per_cpu_second",
+    "pair_events_per_second",
+    "pair_events_per_cpu_second",
+}
+
+
+def test_run_gives_the_summary_of_the_command(tmp_path):
+    dmd = dmd_command()
+    if dmd is None:
+        pytest.skip("the dmd command is not built")
+    scene = SCENES / "square-well.toml"
+    overrides = ["species.0.count=256", "run.equilibration_events=2000", "run.events=10000"]
+    summary = dmdsim.run(scene, out=tmp_path / "py", set=overrides)
+    args = [str(dmd), "run", str(scene), "--quiet", "--out", str(tmp_path / "cli")]
+    for o in overrides:
+        args += ["--set", o]
+    subprocess.run(args, check=True, capture_output=True)
+    cli = json.loads((tmp_path / "cli" / "summary.json").read_text())
+    assert summary.keys() == cli.keys()
+    for key in summary.keys() - TIMINGS:
+        assert summary[key] == cli[key], key
+
+
+def test_ctrl_c_stops_a_whole_run():
+    timer = threading.Timer(0.5, lambda: os.kill(os.getpid(), signal.SIGINT))
+    started = time.monotonic()
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            dmdsim.run(hard_spheres(count=500, events=10**12))
+    finally:
+        timer.cancel()
+    assert time.monotonic() - started < 30.0
 
 
 def test_run_refuses_a_folder_holding_another_run(tmp_path):
