@@ -5,7 +5,7 @@ and kJ/mol) with 2 ps of equilibration and 4 ps of production instead of 10 and 
 g(r) with matplotlib into rods_gr.png. From the root of a clone, after `pip install ./python
 matplotlib`:
 
-    python3 python/examples/rods_gr.py            # about a minute with a release build
+    python3 python/examples/rods_gr.py            # about 10 s
 """
 
 import sys

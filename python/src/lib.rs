@@ -1,8 +1,8 @@
 //! `_dmdsim`, the compiled half of the Python package `dmdsim`: a thin layer over `dmd-sim`.
 //!
-//! [`Simulation`] holds the event loop of a scene (built by `dmd_sim::run::build_simulation`
-//! exactly as `dmd run` starts it) behind an object-safe [`Engine`], so one Python class
-//! serves every model and queue. [`run_json`] runs a whole scene as `dmd run` does and returns
+//! `Simulation` holds the event loop of a scene (built by `dmd_sim::run::build_simulation`
+//! exactly as `dmd run` starts it) behind an object-safe `Engine`, so one Python class
+//! serves every model and queue. `run_json` runs a whole scene as `dmd run` does and returns
 //! its summary as JSON. The engine runs with the GIL released; every 16384 events it takes the
 //! GIL back briefly (at most every 0.1 s) to look for a signal, and a `KeyboardInterrupt` raises
 //! the cancel flag of the loop, which stops between two events. The pure-Python half
