@@ -43,6 +43,14 @@ pub(crate) const STEPS: &[Step] = &[
         &[],
     ),
     ("tests", TEST_COMMAND, &[]),
+    // The Python package (python/): built by pip through maturin in the dev profile (its
+    // crates are mostly built by the tests above), then its pytest suite.
+    (
+        "python package",
+        "python3 -m pip install --quiet --disable-pip-version-check ./python pytest",
+        &[("MATURIN_PEP517_ARGS", "--profile dev")],
+    ),
+    ("python tests", "python3 -m pytest -q python/tests", &[]),
     (
         "docs",
         "cargo doc --workspace --no-deps",

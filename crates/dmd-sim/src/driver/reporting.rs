@@ -107,6 +107,12 @@ pub trait Reporter {
     fn done(&mut self) {}
     /// The equilibration phase ended in this state (reported after [`Reporter::done`]).
     fn equilibrated(&mut self, _end: PhaseEnd) {}
+    /// A flag that stops the run when raised (from [`Reporter::progress`] or another thread):
+    /// the run then ends with `RunError::Sim(SimError::Cancelled)` between two events, nothing
+    /// saved. `None` (the default): only the end of the run or a signal stops it.
+    fn cancel_flag(&self) -> Option<std::sync::Arc<std::sync::atomic::AtomicBool>> {
+        None
+    }
 }
 
 /// A reporter that reports nothing.

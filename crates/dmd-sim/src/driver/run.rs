@@ -242,6 +242,130 @@ pub fn run_scene_with(
     reporter: &mut dyn Reporter,
     options: &RunOptions,
 ) -> Result<Summary, RunError> {
+    let fault = scene.hmc.as_ref().is_some_and(|h| h.fault_fraction > 0.0);
+    let mut summary = set_up(scene, base, out, options, Running { reporter })?;
+    if fault {
+        summary.model = "stepped (fault injection)".to_owned();
+    }
+    Ok(summary)
+}
+
+/// What a scene's simulation is built with besides its state ([`build_simulation`]).
+#[derive(Clone, Debug)]
+pub struct Built {
+    /// The scene's unit system (the simulation computes in internal units: lengths, masses
+    /// and times pass unchanged, energies and temperatures are converted).
+    pub units: Units,
+    /// The interaction model (as the summary's `model`).
+    pub model: &'static str,
+    /// The names of the species, by index.
+    pub species: Vec<String>,
+    /// The principal moments of inertia of each species' body frame (rods `[I, I, 0]` with the
+    /// axis along z; empty for spheres and semi-flexible molecules).
+    pub moments: Vec<[f64; 3]>,
+}
+
+/// Something done with the simulation of a scene, whatever its model and scheduler
+/// ([`build_simulation`]).
+pub trait UseSimulation {
+    /// What it gives.
+    type Output;
+    /// Takes the simulation.
+    fn use_simulation<M: PairModel + Send + 'static, Q: Scheduler + Send + 'static>(
+        self,
+        sim: Simulation<M, Q>,
+        built: Built,
+    ) -> Self::Output;
+}
+
+/// Builds the simulation of `scene` as [`run_scene`] starts it (the same configuration,
+/// velocities, model, queue and loop settings; no phase run, no thermostat, no observers), or
+/// from a checkpoint (`resume`: its file and contents; the scene must be the checkpoint's),
+/// and hands it to `user`. For code that drives the loop itself (the Python package).
+///
+/// # Errors
+/// [`RunError`] as [`run_scene`] for a scene or checkpoint it refuses.
+pub fn build_simulation<U: UseSimulation>(
+    scene: &Scene,
+    base: &Path,
+    resume: Option<(std::path::PathBuf, Checkpoint)>,
+    user: U,
+) -> Result<U::Output, RunError> {
+    let options = RunOptions {
+        resume,
+        ..RunOptions::default()
+    };
+    set_up(scene, base, None, &options, Building(user))
+}
+
+/// What [`set_up`] does with the model and queue it picked.
+trait Go {
+    type Out;
+    fn go<M: PairModel + Send + 'static, Q: Scheduler + Send + 'static>(
+        self,
+        ctx: &Context<'_>,
+        model: M,
+    ) -> Result<Self::Out, RunError>;
+}
+
+/// Runs the scene ([`run_scene_with`]).
+struct Running<'r> {
+    reporter: &'r mut dyn Reporter,
+}
+
+impl Go for Running<'_> {
+    type Out = Summary;
+    fn go<M: PairModel + Send + 'static, Q: Scheduler + Send + 'static>(
+        self,
+        ctx: &Context<'_>,
+        model: M,
+    ) -> Result<Summary, RunError> {
+        ctx.go::<M, Q>(model, self.reporter)
+    }
+}
+
+/// Hands the simulation over ([`build_simulation`]).
+struct Building<U>(U);
+
+impl<U: UseSimulation> Go for Building<U> {
+    type Out = U::Output;
+    fn go<M: PairModel + Send + 'static, Q: Scheduler + Send + 'static>(
+        self,
+        ctx: &Context<'_>,
+        model: M,
+    ) -> Result<U::Output, RunError> {
+        let sim = ctx.simulation::<M, Q>(model)?;
+        let built = Built {
+            units: ctx.units,
+            model: ctx.model_name,
+            species: ctx.scene.species.iter().map(|s| s.name.clone()).collect(),
+            moments: ctx.layout.moments.clone(),
+        };
+        Ok(self.0.use_simulation(sim, built))
+    }
+}
+
+fn go_any_queue<G: Go, M: PairModel + Send + 'static>(
+    ctx: &Context<'_>,
+    g: G,
+    model: M,
+) -> Result<G::Out, RunError> {
+    match ctx.scene.run.queue {
+        QueueKind::Bounded => g.go::<_, LazyQueue<BoundedQueue<Ticket>>>(ctx, model),
+        QueueKind::Heap => g.go::<_, LazyQueue<HeapQueue<Ticket>>>(ctx, model),
+        QueueKind::Tournament => g.go::<_, TournamentTree>(ctx, model),
+    }
+}
+
+/// Everything of a run before its phases: the configuration, velocities, model and queue,
+/// handed to `g`.
+fn set_up<G: Go>(
+    scene: &Scene,
+    base: &Path,
+    out: Option<&Path>,
+    options: &RunOptions,
+    g: G,
+) -> Result<G::Out, RunError> {
     if scene.engine == crate::driver::smd_engine::Engine::Smd {
         // Issue 8: never run an smd scene event-driven behind the caller's back.
         return Err(SceneError::invalid(
@@ -369,9 +493,7 @@ pub fn run_scene_with(
             .map(|s| Particle::new(s.mass).expect("masses are checked"))
             .collect();
         let model = Stepped::new(potentials, particles, n);
-        let mut summary = ctx.go::<_, Heap>(model, reporter)?;
-        summary.model = "stepped (fault injection)".to_owned();
-        return Ok(summary);
+        return g.go::<_, Heap>(&ctx, model);
     }
     let resumed = options.resume.is_some();
     match plan {
@@ -383,22 +505,22 @@ pub fn run_scene_with(
                 .collect();
             match (hard, scene.run.queue) {
                 (true, QueueKind::Bounded) => {
-                    ctx.go::<_, Bounded>(HardSpheres::new(potentials, particles), reporter)
+                    g.go::<_, Bounded>(&ctx, HardSpheres::new(potentials, particles))
                 }
                 (true, QueueKind::Heap) => {
-                    ctx.go::<_, Heap>(HardSpheres::new(potentials, particles), reporter)
+                    g.go::<_, Heap>(&ctx, HardSpheres::new(potentials, particles))
                 }
                 (true, QueueKind::Tournament) => {
-                    ctx.go::<_, TournamentTree>(HardSpheres::new(potentials, particles), reporter)
+                    g.go::<_, TournamentTree>(&ctx, HardSpheres::new(potentials, particles))
                 }
                 (false, QueueKind::Bounded) => {
-                    ctx.go::<_, Bounded>(Stepped::new(potentials, particles, n), reporter)
+                    g.go::<_, Bounded>(&ctx, Stepped::new(potentials, particles, n))
                 }
                 (false, QueueKind::Heap) => {
-                    ctx.go::<_, Heap>(Stepped::new(potentials, particles, n), reporter)
+                    g.go::<_, Heap>(&ctx, Stepped::new(potentials, particles, n))
                 }
                 (false, QueueKind::Tournament) => {
-                    ctx.go::<_, TournamentTree>(Stepped::new(potentials, particles, n), reporter)
+                    g.go::<_, TournamentTree>(&ctx, Stepped::new(potentials, particles, n))
                 }
             }
         }
@@ -409,7 +531,7 @@ pub fn run_scene_with(
                 &tables,
             )?);
             let model = terraced_model(scene, base, &config, tables, omegas.as_deref())?;
-            ctx.go_any_queue(model, reporter)
+            go_any_queue(&ctx, g, model)
         }
         Plan::GayBerne(tables) => {
             ctx.smooth.set(crate::config::rods::estimator(
@@ -418,7 +540,7 @@ pub fn run_scene_with(
                 &tables,
             )?);
             let model = terraced_model(scene, base, &config, tables, omegas.as_deref())?;
-            ctx.go_any_queue(model, reporter)
+            go_any_queue(&ctx, g, model)
         }
         Plan::Tops(tables) => {
             ctx.smooth.set(crate::config::rods::tops_estimator(
@@ -435,15 +557,15 @@ pub fn run_scene_with(
                 None => None,
             };
             let model = crate::config::rods::tops_model(scene, &config.species, tables, start)?;
-            ctx.go_any_queue(model, reporter)
+            go_any_queue(&ctx, g, model)
         }
         Plan::Sites(plan) => {
             let model = crate::config::site_scene::model(scene, &config, plan, resumed)?;
-            ctx.go_any_queue(model, reporter)
+            go_any_queue(&ctx, g, model)
         }
         Plan::Flexible(plan) => {
             let model = crate::config::flexible_scene::model(scene, &config, plan, resumed)?;
-            ctx.go_any_queue(model, reporter)
+            go_any_queue(&ctx, g, model)
         }
     }
 }
@@ -678,27 +800,12 @@ impl Context<'_> {
         }
     }
 
-    fn go_any_queue<M: PairModel>(
+    /// The loop in its initial state, or in the checkpoint's.
+    fn simulation<M: PairModel, Q: Scheduler>(
         &self,
         model: M,
-        reporter: &mut dyn Reporter,
-    ) -> Result<Summary, RunError> {
-        match self.scene.run.queue {
-            QueueKind::Bounded => self.go::<_, LazyQueue<BoundedQueue<Ticket>>>(model, reporter),
-            QueueKind::Heap => self.go::<_, LazyQueue<HeapQueue<Ticket>>>(model, reporter),
-            QueueKind::Tournament => self.go::<_, TournamentTree>(model, reporter),
-        }
-    }
-
-    fn go<M: PairModel, Q: Scheduler>(
-        &self,
-        model: M,
-        reporter: &mut dyn Reporter,
-    ) -> Result<Summary, RunError> {
-        let scene = self.scene;
-        // A resumed run starts from its checkpoint's state and stage.
-        let resume = self.options.resume.as_ref();
-        let mut sim: Simulation<M, Q> = match resume {
+    ) -> Result<Simulation<M, Q>, RunError> {
+        let mut sim = match &self.options.resume {
             Some((path, c)) => {
                 Simulation::from_state(model, &c.sim).map_err(|e| CheckpointError {
                     path: path.clone(),
@@ -713,11 +820,24 @@ impl Context<'_> {
                 model,
                 self.settings,
             )
-            .map_err(|e| setup_error(scene, self.config, &self.units, e))?,
+            .map_err(|e| setup_error(self.scene, self.config, &self.units, e))?,
         };
-        if let (None, Some(images)) = (resume, &self.images) {
+        if let (None, Some(images)) = (&self.options.resume, &self.images) {
             sim.set_images(images.clone());
         }
+        Ok(sim)
+    }
+
+    fn go<M: PairModel, Q: Scheduler>(
+        &self,
+        model: M,
+        reporter: &mut dyn Reporter,
+    ) -> Result<Summary, RunError> {
+        let scene = self.scene;
+        // A resumed run starts from its checkpoint's state and stage.
+        let resume = self.options.resume.as_ref();
+        let mut sim: Simulation<M, Q> = self.simulation(model)?;
+        sim.set_cancel(reporter.cancel_flag());
         let fault = scene.hmc.as_ref().map_or(0.0, |h| h.fault_fraction);
         if fault > 0.0 {
             sim.set_fault_fraction(fault, scene.seed);

@@ -26,6 +26,9 @@
 //! lose digits however long the run (the total time is kept in a compensated sum). Counters and
 //! generations are `u64`.
 
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
 use event_queue::QueueError;
 use glam::{DQuat, DVec3};
 use rand::{RngExt, SeedableRng};
@@ -77,6 +80,10 @@ pub enum SimError {
         "no events are left (the bodies neither move nor meet), {0} events short of the run length"
     )]
     NoEvents(u64),
+    /// The flag of [`Simulation::set_cancel`] was raised; the state is whole and the run can
+    /// go on with another call.
+    #[error("cancelled by the caller")]
+    Cancelled,
 }
 
 /// Why a simulation could not be set up.
@@ -408,6 +415,8 @@ pub struct Simulation<M, S> {
     pause_at_rebase: bool,
     paused: bool,
     refreshed_momenta: bool,
+    /// Set by another thread to stop [`Simulation::run`] early ([`Simulation::set_cancel`]).
+    cancel: Option<Arc<AtomicBool>>,
 }
 
 impl<M, S> Simulation<M, S>
@@ -574,6 +583,7 @@ where
             pause_at_rebase: false,
             paused: false,
             refreshed_momenta: false,
+            cancel: None,
         };
         sim.kinetic = sim.kinetic_energy();
         sim.translational = sim.translational_kinetic();
@@ -604,6 +614,7 @@ where
             Stop::Events(n) => self.counters.events.saturating_add(n),
             Stop::Time(_) => u64::MAX,
         };
+        let mut cancelled = false;
         while self.counters.events < target {
             if self.step(sampler)? {
                 break;
@@ -621,6 +632,14 @@ where
                     events: self.counters.events,
                     elapsed: self.now - self.phase.start,
                 });
+                if self
+                    .cancel
+                    .as_ref()
+                    .is_some_and(|c| c.load(Ordering::Relaxed))
+                {
+                    cancelled = true;
+                    break;
+                }
             }
             #[cfg(debug_assertions)]
             if self.settings.debug_check_events > 0
@@ -648,6 +667,9 @@ where
             events: self.counters.events,
             elapsed: self.now - self.phase.start,
         });
+        if cancelled {
+            return Err(SimError::Cancelled);
+        }
         if let Stop::Events(_) = stop
             && self.counters.events < target
         {
@@ -1258,6 +1280,13 @@ where
     }
 
     // ----- phases ---------------------------------------------------------------------------
+
+    /// A flag that stops [`run`](Self::run) with [`SimError::Cancelled`] when raised (from
+    /// another thread, or from its `progress` callback); it is read every 16384 events, where
+    /// the state is whole. `None` (the default) never stops.
+    pub fn set_cancel(&mut self, flag: Option<Arc<AtomicBool>>) {
+        self.cancel = flag;
+    }
 
     /// Switches the Andersen thermostat on (or off with `None`).
     pub fn set_thermostat(&mut self, thermostat: Option<Andersen>) {

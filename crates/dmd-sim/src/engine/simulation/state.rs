@@ -331,6 +331,7 @@ where
             pause_at_rebase: false,
             paused: false,
             refreshed_momenta: false,
+            cancel: None,
         };
         sim.restore_state(state, true)?;
         Ok(sim)

@@ -1,0 +1,281 @@
+"""Tests of the dmdsim package: run with `python3 -m pytest python/tests` after installing it."""
+
+import json
+import os
+import signal
+import subprocess
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import dmdsim
+
+ROOT = Path(__file__).resolve().parents[2]
+SCENES = ROOT / "scenes"
+
+
+def hard_spheres(count=256, events=20_000):
+    """Hard spheres at ρσ³ = 0.5 on an fcc lattice (4 n³ bodies)."""
+    return {
+        "version": 1,
+        "seed": 7,
+        "box": {"density": 0.5},
+        "species": [{"name": "A", "count": count}],
+        "pair": [{"species": ["A", "A"], "steps": [[1.0, float("inf")]]}],
+        "init": {"positions": "fcc", "temperature": 1.0},
+        "run": {"equilibration_events": 0, "events": events},
+    }
+
+
+def test_arrays_have_the_documented_shapes_and_dtypes():
+    sim = dmdsim.load(hard_spheres())
+    n = 256
+    assert sim.n == n
+    assert sim.model == "hard-spheres"
+    assert sim.units == "reduced"
+    assert sim.species_names == ["A"]
+    for name, shape, dtype in [
+        ("positions", (n, 3), np.float64),
+        ("unwrapped_positions", (n, 3), np.float64),
+        ("velocities", (n, 3), np.float64),
+        ("quaternions", (n, 4), np.float64),
+        ("angular_velocities", (n, 3), np.float64),
+        ("species", (n,), np.int64),
+        ("box_lengths", (3,), np.float64),
+    ]:
+        a = getattr(sim, name)
+        assert isinstance(a, np.ndarray), name
+        assert a.shape == shape, name
+        assert a.dtype == dtype, name
+    # Spheres have no attitude: identity quaternions, no angular velocity.
+    np.testing.assert_array_equal(sim.quaternions, np.tile([1.0, 0.0, 0.0, 0.0], (n, 1)))
+    assert not sim.angular_velocities.any()
+    # ρ = N / V.
+    assert np.prod(sim.box_lengths) == pytest.approx(n / 0.5, rel=1e-12)
+
+
+def test_advance_by_events_conserves_energy_and_stays_in_the_box():
+    sim = dmdsim.load(hard_spheres())
+    before = sim.state()
+    assert before["events"] == 0 and before["time"] == 0.0
+    # Maxwell–Boltzmann velocities at kT = 1 with zero total momentum.
+    assert np.abs(sim.velocities.sum(axis=0)).max() < 1e-12
+    p0 = sim.positions.copy()
+    sim.advance(events=20_000)
+    after = sim.state()
+    assert sim.events == after["events"] == 20_000
+    assert after["time"] > 0.0
+    assert after["potential_energy"] == 0.0
+    assert after["total_energy"] == pytest.approx(before["total_energy"], rel=1e-12)
+    pos = sim.positions
+    assert not np.array_equal(pos, p0)
+    assert (pos >= 0.0).all() and (pos < sim.box_lengths).all()
+    # Unwrapped positions differ from them by whole box lengths.
+    shift = (sim.unwrapped_positions - pos) / sim.box_lengths
+    np.testing.assert_allclose(shift, np.round(shift), atol=1e-9)
+    assert np.abs(sim.velocities.sum(axis=0)).max() < 1e-10
+    assert after["events_by_kind"]["core"] > 0
+
+
+def test_advance_by_time_ends_at_that_time():
+    sim = dmdsim.load(hard_spheres())
+    sim.advance(time=0.25)
+    assert sim.time == pytest.approx(0.25, abs=1e-12)
+    sim.advance(time=0.25)
+    assert sim.time == pytest.approx(0.5, abs=1e-12)
+    with pytest.raises(ValueError):
+        sim.advance(events=10, time=1.0)
+    with pytest.raises(ValueError):
+        sim.advance(time=-1.0)
+
+
+def test_a_resumed_checkpoint_continues_bit_for_bit(tmp_path):
+    path = tmp_path / "state.dmd"
+    a = dmdsim.load(hard_spheres(), set={"seed": 11})
+    a.advance(events=7_000)
+    a.checkpoint(path)
+    b = dmdsim.resume(path)
+    assert b.events == a.events
+    np.testing.assert_array_equal(b.positions, a.positions)
+    a.advance(events=9_000)
+    b.advance(events=9_000)
+    assert a.events == b.events == 16_000
+    assert a.time == b.time
+    np.testing.assert_array_equal(a.positions, b.positions)
+    np.testing.assert_array_equal(a.velocities, b.velocities)
+    assert a.state() == b.state()
+
+
+def test_a_checkpoint_that_is_not_one_raises(tmp_path):
+    bad = tmp_path / "junk.dmd"
+    bad.write_bytes(b"not a checkpoint")
+    with pytest.raises(dmdsim.CheckpointError):
+        dmdsim.resume(bad)
+
+
+def dmd_command():
+    """The `dmd` command of this clone's build, if it is built."""
+    target = Path(os.environ.get("CARGO_TARGET_DIR", ROOT / "target"))
+    return next(
+        (p for p in [target / "debug" / "dmd", target / "release" / "dmd"] if p.exists()), None
+    )
+
+
+def test_a_bad_key_raises_scene_error_with_the_commands_message(tmp_path):
+    scene = hard_spheres()
+    scene["box"] = {"densty": 0.5}
+    with pytest.raises(dmdsim.SceneError) as e:
+        dmdsim.load(scene)
+    assert isinstance(e.value, dmdsim.DmdError)
+    assert "densty" in str(e.value)
+    # The same text as `dmd run` prints after `dmd: FILE: `, when the command is built.
+    dmd = dmd_command()
+    if dmd is None:
+        pytest.skip("the dmd command is not built")
+    file = tmp_path / "bad.toml"
+    file.write_text((SCENES / "hard-spheres.toml").read_text())
+    with pytest.raises(dmdsim.SceneError) as from_file:
+        dmdsim.load(file, set=["box.densty=0.5"])
+    cli = subprocess.run(
+        [str(dmd), "run", str(file), "--set", "box.densty=0.5", "--out", str(tmp_path / "o")],
+        capture_output=True,
+        text=True,
+    )
+    assert cli.returncode == 2
+    assert cli.stderr.strip() == f"dmd: {file}: {from_file.value}"
+
+
+def test_overrides_as_list_or_dict_and_scene_as_text():
+    text = (SCENES / "hard-spheres.toml").read_text()
+    a = dmdsim.load(text, set=["species.0.count=108", "box.density=0.4"])
+    b = dmdsim.load(SCENES / "hard-spheres.toml", set={"species.0.count": 108, "box.density": 0.4})
+    assert a.n == b.n == 108
+    np.testing.assert_array_equal(a.positions, b.positions)
+    np.testing.assert_array_equal(a.velocities, b.velocities)
+    with pytest.raises(dmdsim.SceneError):
+        dmdsim.load(SCENES / "no-such-scene.toml")
+
+
+def test_run_returns_the_summary_and_writes_the_commands_files(tmp_path):
+    scene = hard_spheres(events=30_000)
+    scene["run"]["equilibration_events"] = 5_000
+    scene["output"] = {"sample_interval": 0.05, "rdf": {"bins": 50, "r_max": 2.5}}
+    summary = dmdsim.run(scene, out=tmp_path / "run")
+    assert summary["events"] == 30_000
+    assert summary["equilibration_events"] == 5_000
+    assert summary["n_bodies"] == 256
+    assert summary["relative_energy_drift"] < 1e-12
+    assert 2.5 < summary["compressibility"] < 4.5
+    on_disk = json.loads((tmp_path / "run" / "summary.json").read_text())
+    assert on_disk == summary
+    obs = dmdsim.read_observables(tmp_path / "run")
+    rdf = obs["rdf"]
+    r, g = rdf[list(rdf)[0]], rdf[list(rdf)[1]]
+    assert r.dtype == np.float64 and len(r) == 50
+    # No pair closer than the hard core; the contact peak is above 1.
+    assert (g[r < 0.95] == 0).all()
+    assert g.max() > 1.2
+    # The same scene again gives the same physics (the seed fixes everything).
+    again = dmdsim.run(scene)
+    for key in ["events", "sim_time", "pressure", "energy_total_end"]:
+        assert again[key] == summary[key]
+
+
+TIMINGS = {
+    "wall_seconds",
+    "cpu_seconds",
+    "events_per_second",
+    "events_per_cpu_second",
+    "pair_events_per_second",
+    "pair_events_per_cpu_second",
+}
+
+
+def test_run_gives_the_summary_of_the_command(tmp_path):
+    dmd = dmd_command()
+    if dmd is None:
+        pytest.skip("the dmd command is not built")
+    scene = SCENES / "square-well.toml"
+    overrides = ["species.0.count=256", "run.equilibration_events=2000", "run.events=10000"]
+    summary = dmdsim.run(scene, out=tmp_path / "py", set=overrides)
+    args = [str(dmd), "run", str(scene), "--quiet", "--out", str(tmp_path / "cli")]
+    for o in overrides:
+        args += ["--set", o]
+    subprocess.run(args, check=True, capture_output=True)
+    cli = json.loads((tmp_path / "cli" / "summary.json").read_text())
+    assert summary.keys() == cli.keys()
+    for key in summary.keys() - TIMINGS:
+        assert summary[key] == cli[key], key
+
+
+def test_ctrl_c_stops_a_whole_run():
+    timer = threading.Timer(0.5, lambda: os.kill(os.getpid(), signal.SIGINT))
+    started = time.monotonic()
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            dmdsim.run(hard_spheres(count=500, events=10**12))
+    finally:
+        timer.cancel()
+    assert time.monotonic() - started < 30.0
+
+
+def test_run_refuses_a_folder_holding_another_run(tmp_path):
+    scene = hard_spheres(events=2_000)
+    dmdsim.run(scene, out=tmp_path)
+    with pytest.raises(dmdsim.RunError):
+        dmdsim.run(scene, out=tmp_path)
+    assert dmdsim.run(scene, out=tmp_path, force=True)["events"] == 2_000
+
+
+def test_rods_have_unit_quaternions_and_the_kinetic_energy_of_their_motion():
+    sim = dmdsim.load(SCENES / "rods-paper.toml")
+    assert sim.model == "terraced-rods"
+    assert sim.units == "molecular"
+    sim.advance(events=3_000)
+    q = sim.quaternions
+    assert q.shape == (512, 4)
+    np.testing.assert_allclose(np.linalg.norm(q, axis=1), 1.0, atol=1e-12)
+    assert np.abs(q[:, 0]).max() < 1.0  # not identities: the rods point every way
+    # The axis is the body z rotated into the lab frame; a linear rotor turns across it.
+    w, x, y, z = q.T
+    axis = np.stack([2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)], axis=1)
+    omega = sim.angular_velocities
+    assert np.abs((omega * axis).sum(axis=1)).max() < 1e-9 * np.abs(omega).max()
+    # ½ m v² + ½ I ω² in g/mol·Å²/ps² (10 J/mol) is the engine's kinetic energy in kJ/mol.
+    mass, inertia = 18.0, 1.154
+    kinetic = 0.5 * mass * (sim.velocities**2).sum() + 0.5 * inertia * (omega**2).sum()
+    assert kinetic / 100.0 == pytest.approx(sim.state()["kinetic_energy"], rel=1e-10)
+
+
+def test_ctrl_c_stops_the_engine_and_leaves_it_usable():
+    sim = dmdsim.load(hard_spheres(count=500))
+    timer = threading.Timer(0.5, lambda: os.kill(os.getpid(), signal.SIGINT))
+    started = time.monotonic()
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            sim.advance(events=10**12)
+    finally:
+        timer.cancel()
+    # The timer thread ran while the engine did: the GIL was released.
+    assert time.monotonic() - started < 30.0
+    stopped = sim.events
+    assert 0 < stopped < 10**12
+    sim.advance(events=1_000)
+    assert sim.events == stopped + 1_000
+
+
+def test_dicts_that_have_no_toml_form_raise_scene_error():
+    scene = hard_spheres()
+    scene["init"]["temperature"] = object()
+    with pytest.raises(dmdsim.SceneError, match="init.temperature"):
+        dmdsim.load(scene)
+
+
+def test_the_example_script_parses():
+    source = (ROOT / "python" / "examples" / "rods_gr.py").read_text()
+    compile(source, "rods_gr.py", "exec")
