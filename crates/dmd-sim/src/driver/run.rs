@@ -43,6 +43,12 @@ use crate::driver::reporting::{PlotInfo, terrace_step, write_observables};
 use crate::engine::model::{HardSpheres, PairModel, Stepped};
 use crate::engine::schedule::Scheduler;
 use crate::engine::simulation::MAX_REBASE_EVENTS;
+
+/// How far (relative to the energy scale) a resumed state's tracked energies may be from the
+/// ones its velocities and pair levels give: the tolerance of the loop's own debug check.
+const RESUME_ENERGY_TOLERANCE: f64 = 1e-9;
+/// How far (relative) a resumed plain production run's energy may be from its recorded start.
+const RESUME_DRIFT: f64 = 1e-2;
 use crate::engine::simulation::{Andersen, LoopSettings, Progress, SetupError, Simulation, Stop};
 use crate::models::rotor::TopInertia;
 use crate::models::search::SearchStats;
@@ -321,6 +327,31 @@ pub fn run_scene_with(
         skin,
         start_time: 0.0,
     };
+    if let Some((path, c)) = &options.resume {
+        // The loop's settings are the scene's: an edited scene or state would not continue
+        // the run it claims to.
+        let fresh = choose_skin(scene, plan.reach(), hard, &config).ok();
+        let (rebase, seed, _, _, _) = c.sim.settings;
+        let problem = if fresh != Some(skin) {
+            Some(format!(
+                "its neighbour-list skin {skin} is not the one the scene gives ({})",
+                fresh.map_or_else(|| "none".to_owned(), |f| f.to_string())
+            ))
+        } else if rebase != settings.rebase_events || seed != settings.seed {
+            Some("its re-basing interval or seed is not the scene's".to_owned())
+        } else {
+            None
+        };
+        if let Some(m) = problem {
+            return Err(CheckpointError {
+                path: path.clone(),
+                problem: Problem::Inconsistent(
+                    crate::engine::simulation::StateError(m).to_string(),
+                ),
+            }
+            .into());
+        }
+    }
     if let Some(dir) = out {
         std::fs::create_dir_all(dir).map_err(|e| OutputError {
             path: dir.to_owned(),
@@ -671,6 +702,37 @@ impl Context<'_> {
         }
     }
 
+    /// The checks of a state restored from a checkpoint that need the built simulation.
+    fn check_resumed_state<M: PairModel, Q: Scheduler>(
+        &self,
+        sim: &Simulation<M, Q>,
+        c: &Checkpoint,
+        faults: bool,
+    ) -> Result<(), String> {
+        if !sim.at_origin() {
+            return Err("it was not saved at a re-basing (its clocks are not all 0)".into());
+        }
+        if !faults {
+            sim.check_within(RESUME_ENERGY_TOLERANCE)?;
+        }
+        // A plain production run without a thermostat conserves energy: the state's energy
+        // is its start's within any drift a run can have.
+        if let (Stage::Production(_), None, None, Some((_, e0, _, _))) =
+            (c.stage, &self.scene.hmc, c.sim.thermostat, c.record.start)
+        {
+            let (k, u) = (sim.tracked_kinetic(), sim.tracked_potential());
+            let scale = k.abs().max(u.abs()).max(e0.abs()).max(f64::MIN_POSITIVE);
+            if !((k + u - e0).abs() <= RESUME_DRIFT * scale) {
+                return Err(format!(
+                    "its energy {} differs from the {e0} it recorded at the start of production \
+                     by more than any run drifts",
+                    k + u
+                ));
+            }
+        }
+        Ok(())
+    }
+
     fn go_any_queue<M: PairModel>(
         &self,
         model: M,
@@ -709,6 +771,18 @@ impl Context<'_> {
             .map_err(|e| setup_error(scene, self.config, &self.units, e))?,
         };
         let fault = scene.hmc.as_ref().map_or(0.0, |h| h.fault_fraction);
+        if let Some((path, c)) = resume {
+            // The restored state must be a state of this scene's physics: lists, cells, levels
+            // against distances, no overlap, tracked energies (fault injection, a validation
+            // tool, leaves missed events in its states on purpose).
+            self.check_resumed_state(&sim, c, fault > 0.0)
+                .map_err(|m| CheckpointError {
+                    path: path.clone(),
+                    problem: Problem::Inconsistent(
+                        crate::engine::simulation::StateError(m).to_string(),
+                    ),
+                })?;
+        }
         if fault > 0.0 {
             sim.set_fault_fraction(fault, scene.seed);
         }
@@ -915,7 +989,21 @@ impl Context<'_> {
                 Some(h) => Left::Segments(h.segments),
                 None => left_of(stop),
             });
-        } else if let Some((_, c)) = resume {
+        } else if let Some((path, c)) = resume {
+            let l = self.config.lengths;
+            crate::driver::checkpoint::check_observers(
+                &c.observers,
+                observers.rdf.as_ref(),
+                observers.correlations.as_ref(),
+                &self.config.species,
+                l.x * l.y * l.z,
+            )
+            .map_err(|m| CheckpointError {
+                path: path.clone(),
+                problem: Problem::Inconsistent(
+                    crate::engine::simulation::StateError(m).to_string(),
+                ),
+            })?;
             observers.rdf = c.observers.rdf.clone();
             observers.correlations = c.observers.correlations.clone();
             observers.series = c.observers.series.clone();
@@ -1343,6 +1431,88 @@ fn check_checkpoint_scene(
             )));
         }
     }
+    // The box, clocks and numbers of the state: the scene's box, every number finite.
+    let l = c.sim.lengths;
+    if !(l.is_finite() && l.min_element() > 0.0) {
+        return Err(bad(format!("its box {l} is not a box")));
+    }
+    if let Some(box_) = crate::config::init::box_lengths(scene)
+        && box_ != l
+    {
+        return Err(bad(format!("its box is {l}, the scene's {box_}")));
+    }
+    let finite = |x: f64| x.is_finite();
+    let (p0, p1, p2, p3, p4) = &c.sim.phase;
+    if !(finite(c.sim.epoch.value())
+        && c.sim.epoch.value() >= 0.0
+        && finite(c.sim.translational)
+        && [
+            *p0,
+            *p1,
+            p2.value(),
+            p3.value(),
+            p4.value(),
+            c.sim.translational_integral.value(),
+        ]
+        .into_iter()
+        .all(finite))
+    {
+        return Err(bad("its clock or phase sums are not finite".into()));
+    }
+    if let Some((k, e, p, scale)) = c.record.start
+        && !([k, e, scale].into_iter().chain(p).all(finite) && k >= 0.0 && scale >= 0.0)
+    {
+        return Err(bad(
+            "its record of the start of production is not finite".into()
+        ));
+    }
+    let (wall, cpu) = c.record.seconds;
+    if !(finite(wall) && finite(cpu) && wall >= 0.0 && cpu >= 0.0) {
+        return Err(bad("its record of the time spent is not finite".into()));
+    }
+    // The thermostat and the sampling interval of the state are the scene's.
+    if let Some((rate, temperature)) = c.sim.thermostat {
+        let ok = scene.thermostat.kind == ThermostatKind::Andersen
+            && scene.thermostat.rate == Some(rate)
+            && scene
+                .thermostat
+                .temperature
+                .unwrap_or(scene.init.temperature)
+                == temperature;
+        if !ok {
+            return Err(bad(format!(
+                "its thermostat (rate {rate}, temperature {temperature}) is not the scene's"
+            )));
+        }
+    }
+    if let Some(dt) = c.sim.sample_dt
+        && scene.output.sample_interval != Some(dt)
+    {
+        return Err(bad(format!(
+            "its sampling interval {dt} is not the scene's output.sample_interval"
+        )));
+    }
+    // What is left of the stage is at most the scene's phase.
+    let too_long = match c.stage {
+        // Between phases.
+        Stage::Equilibration(Left::Events(0)) | Stage::Production(Left::Events(0)) => false,
+        Stage::Equilibration(Left::Events(n)) => {
+            scene.run.equilibration_time.is_some() || n > scene.run.equilibration_events
+        }
+        Stage::Equilibration(Left::Time(t)) => scene
+            .run
+            .equilibration_time
+            .is_none_or(|e| t > e * (1.0 + 1e-9)),
+        Stage::Equilibration(Left::Segments(n)) => scene
+            .hmc
+            .as_ref()
+            .is_none_or(|h| n > h.equilibration_segments),
+        Stage::Production(Left::Segments(n)) => scene.hmc.as_ref().is_none_or(|h| n > h.segments),
+        Stage::Production(Left::Events(n)) => scene.run.events.is_none_or(|e| n > e),
+        Stage::Production(Left::Time(t)) => {
+            scene.run.events.is_some() || scene.run.time.is_none_or(|e| t > e * (1.0 + 1e-9))
+        }
+    };
     // The stage must be one this scene has (a hand-edited or foreign file must not reach a
     // broken invariant of the driver).
     let hmc = scene.hmc.is_some();
@@ -1363,8 +1533,19 @@ fn check_checkpoint_scene(
             if hmc { "with" } else { "without" }
         )));
     }
+    if too_long {
+        return Err(bad(format!(
+            "its stage {:?} has more left than the scene's run",
+            c.stage
+        )));
+    }
     if hmc != c.chain.is_some() {
         return Err(bad("its HMC chain does not match the scene's [hmc]".into()));
+    }
+    if let (Some(chain), Some(h)) = (&c.chain, &scene.hmc) {
+        chain
+            .check_fits(&hmc_settings(scene), h.series)
+            .map_err(bad)?;
     }
     if matches!(c.stage, Stage::Production(_)) && c.record.start.is_none() {
         return Err(bad(
