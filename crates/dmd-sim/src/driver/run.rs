@@ -49,6 +49,8 @@ use crate::engine::simulation::MAX_REBASE_EVENTS;
 const RESUME_ENERGY_TOLERANCE: f64 = 1e-9;
 /// How far (relative) a resumed plain production run's energy may be from its recorded start.
 const RESUME_DRIFT: f64 = 1e-2;
+
+use crate::analysis::output::short;
 use crate::engine::simulation::{Andersen, LoopSettings, Progress, SetupError, Simulation, Stop};
 use crate::models::rotor::TopInertia;
 use crate::models::search::SearchStats;
@@ -334,8 +336,9 @@ pub fn run_scene_with(
         let (rebase, seed, _, _, _) = c.sim.settings;
         let problem = if fresh != Some(skin) {
             Some(format!(
-                "its neighbour-list skin {skin} is not the one the scene gives ({})",
-                fresh.map_or_else(|| "none".to_owned(), |f| f.to_string())
+                "its neighbour-list skin {} is not the one the scene gives ({})",
+                short(skin),
+                fresh.map_or_else(|| "none".to_owned(), short)
             ))
         } else if rebase != settings.rebase_events || seed != settings.seed {
             Some("its re-basing interval or seed is not the scene's".to_owned())
@@ -724,9 +727,10 @@ impl Context<'_> {
             let scale = k.abs().max(u.abs()).max(e0.abs()).max(f64::MIN_POSITIVE);
             if !((k + u - e0).abs() <= RESUME_DRIFT * scale) {
                 return Err(format!(
-                    "its energy {} differs from the {e0} it recorded at the start of production \
+                    "its energy {} differs from the {} it recorded at the start of production \
                      by more than any run drifts",
-                    k + u
+                    short(k + u),
+                    short(e0)
                 ));
             }
         }
@@ -1481,7 +1485,9 @@ fn check_checkpoint_scene(
                 == temperature;
         if !ok {
             return Err(bad(format!(
-                "its thermostat (rate {rate}, temperature {temperature}) is not the scene's"
+                "its thermostat (rate {}, temperature {}) is not the scene's",
+                short(rate),
+                short(temperature)
             )));
         }
     }
@@ -1489,7 +1495,8 @@ fn check_checkpoint_scene(
         && scene.output.sample_interval != Some(dt)
     {
         return Err(bad(format!(
-            "its sampling interval {dt} is not the scene's output.sample_interval"
+            "its sampling interval {} is not the scene's output.sample_interval",
+            short(dt)
         )));
     }
     // What is left of the stage is at most the scene's phase.
