@@ -758,4 +758,16 @@ fn forged_checkpoints_with_valid_crcs_are_refused_as_states() {
     b.sim.model_extra[0] *= 2.0;
     refused(&d, "rod-axis", &seal(&b), "body 0 cannot be restored");
     let _ = std::fs::remove_dir_all(d);
+
+    // An HMC chain whose ΔH histogram lost a bin, or whose counts disagree.
+    let (d, bytes, _) = damaged_setup("forged-hmc");
+    std::fs::remove_file(d.join(checkpoint::FILE_NAME)).unwrap();
+    let c = checkpoint::decode(&bytes).unwrap();
+    let mut b = c.clone();
+    b.chain.as_mut().unwrap().stats.histogram.pop();
+    refused(&d, "hmc-histogram", &seal(&b), "its ΔH histogram has");
+    let mut b = c.clone();
+    b.chain.as_mut().unwrap().stats.accepted += 1;
+    refused(&d, "hmc-counts", &seal(&b), "its HMC counts do not agree");
+    let _ = std::fs::remove_dir_all(d);
 }
