@@ -854,7 +854,13 @@ fn main() -> ExitCode {
             set.extend(engine.map(|e| format!("engine={e}")));
             &set
         }) {
-            Ok((s, _)) => {
+            // Everything `dmd run` refuses before its first event is refused here too.
+            Ok((s, base)) => {
+                let text = std::fs::read_to_string(&scene).unwrap_or_default();
+                if let Err(e) = dmd_sim::run::check_setup(&s, &base, &text, &set) {
+                    eprintln!("dmd: {}: {e}", scene.display());
+                    return exit_code(&e);
+                }
                 println!(
                     "{}: a valid scene of {} bodies{}",
                     scene.display(),

@@ -250,6 +250,50 @@ pub fn run_scene_with(
     reporter: &mut dyn Reporter,
     options: &RunOptions,
 ) -> Result<Summary, RunError> {
+    run_or_set_up(scene, base, out, reporter, options, false)
+}
+
+/// Everything `dmd run` checks of a scene before its first event, for `dmd check`: the scene's
+/// set-up (lattice or start file, box against the cut-off, skin, overlaps, the body model and
+/// its tables, the observables' sizes) is built and dropped, nothing runs and nothing is
+/// written. A scene of `[chains]` or `[sweep]` is set up point by point; a scene for the smd
+/// engine is left to its engine.
+///
+/// # Errors
+/// The [`RunError`] `dmd run` would stop with before its first event.
+pub fn check_setup(
+    scene: &Scene,
+    base: &Path,
+    text: &str,
+    overrides: &[String],
+) -> Result<(), RunError> {
+    if scene.engine == crate::driver::smd_engine::Engine::Smd {
+        return Ok(());
+    }
+    let points = scene.sweep.as_ref().map_or(1, |s| s.values.len());
+    for k in 0..points {
+        let point = if scene.sweep.is_some() {
+            scene.sweep_point(text, overrides, k)?
+        } else {
+            scene.clone()
+        };
+        match run_or_set_up(&point, base, None, &mut Quiet, &RunOptions::default(), true) {
+            Err(RunError::SetUpOnly) => {}
+            Err(e) => return Err(e),
+            Ok(_) => {}
+        }
+    }
+    Ok(())
+}
+
+fn run_or_set_up(
+    scene: &Scene,
+    base: &Path,
+    out: Option<&Path>,
+    reporter: &mut dyn Reporter,
+    options: &RunOptions,
+    set_up_only: bool,
+) -> Result<Summary, RunError> {
     if scene.engine == crate::driver::smd_engine::Engine::Smd {
         // Issue 8: never run an smd scene event-driven behind the caller's back.
         return Err(SceneError::invalid(
@@ -380,6 +424,7 @@ pub fn run_scene_with(
         options,
         smooth: std::cell::Cell::new(None),
         layout: layout_of(scene, &plan, &units),
+        set_up_only,
     };
     if fault > 0.0 {
         // Checked with the scene: fault injection is for sphere scenes.
@@ -651,6 +696,8 @@ struct Context<'a> {
     smooth: std::cell::Cell<Option<Box<dyn crate::analysis::smooth::Evaluate>>>,
     /// How trajectory frames draw each species.
     layout: Layout,
+    /// Stop with [`RunError::SetUpOnly`] once the simulation and its outputs' sizes are set up.
+    set_up_only: bool,
 }
 
 impl Context<'_> {
@@ -725,7 +772,8 @@ impl Context<'_> {
         {
             let (k, u) = (sim.tracked_kinetic(), sim.tracked_potential());
             let scale = k.abs().max(u.abs()).max(e0.abs()).max(f64::MIN_POSITIVE);
-            if !((k + u - e0).abs() <= RESUME_DRIFT * scale) {
+            let drift = (k + u - e0).abs();
+            if drift.is_nan() || drift > RESUME_DRIFT * scale {
                 return Err(format!(
                     "its energy {} differs from the {} it recorded at the start of production \
                      by more than any run drifts",
@@ -839,6 +887,13 @@ impl Context<'_> {
             (None, Some(t), _) => Stop::Time(t),
             (None, None, None) => unreachable!("checked"),
         };
+        // Refused before equilibration, not after it.
+        if scene.output.rdf.is_some() {
+            rdf_r_max(scene, self.config.lengths)?;
+        }
+        if self.set_up_only {
+            return Err(RunError::SetUpOnly);
+        }
         reporter.start(&self.plan(andersen, eq_stop, hmc_eq, stop));
         if resume.is_none() && equilibrate {
             run.record.had_thermostat = andersen.is_some();
@@ -888,15 +943,7 @@ impl Context<'_> {
         let mut observers = Observers::default();
         let lengths = self.config.lengths;
         if let Some(rdf) = &o.rdf {
-            let half = 0.5 * lengths.min_element();
-            let r_max = rdf.r_max.unwrap_or(half.min(5.0));
-            if r_max > half {
-                return Err(SceneError::invalid(
-                    "output.rdf.r_max",
-                    format!("{r_max} exceeds half the smallest box side ({half})"),
-                )
-                .into());
-            }
+            let r_max = rdf_r_max(scene, lengths)?;
             observers.rdf = Some(Rdf::new(rdf.bins as usize, r_max, rdf.every));
         }
         if o.msd.is_some() || o.vacf.is_some() || o.orientation_acf.is_some() {
@@ -1560,6 +1607,24 @@ fn check_checkpoint_scene(
         ));
     }
     Ok(())
+}
+
+/// The g(r) range of a scene with `output.rdf` in a box of `lengths`: at most half the box.
+fn rdf_r_max(scene: &Scene, lengths: DVec3) -> Result<f64, SceneError> {
+    let half = 0.5 * lengths.min_element();
+    let r_max = scene
+        .output
+        .rdf
+        .as_ref()
+        .and_then(|r| r.r_max)
+        .unwrap_or(half.min(5.0));
+    if r_max > half {
+        return Err(SceneError::invalid(
+            "output.rdf.r_max",
+            format!("{r_max} exceeds half the smallest box side ({half})"),
+        ));
+    }
+    Ok(r_max)
 }
 
 fn left_of(stop: Stop) -> Left {

@@ -98,6 +98,28 @@ const VALUES: &[&str] = &[
     "{ interval = 1e-9 }",
 ];
 
+/// Structure characters inserted into text.
+const INSERTS: &[&[u8]] = &[
+    b"[",
+    b"]",
+    b"=",
+    b"\"",
+    b"{",
+    b"\n[[species]]\n",
+    b"\n[run]\n",
+    b"#",
+    b",",
+    b"\n",
+    b" ",
+];
+
+/// Varints of postcard (lengths and counts) near 2^64 and 2^32.
+const HUGE_VARINTS: &[&[u8]] = &[
+    &[0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0x01],
+    &[0xff, 0xff, 0xff, 0xff, 0x0f],
+    &[0x80, 0x80, 0x80, 0x80, 0x01],
+];
+
 /// The fuzzing budget of one target and the seed of its generator.
 fn budget(target: &str) -> (Duration, u64) {
     let seconds = std::env::var("DMD_FUZZ_SECONDS")
@@ -220,19 +242,7 @@ fn mutate_text(rng: &mut Rng, input: &[u8], others: &[Vec<u8>]) -> Vec<u8> {
             // Structure characters inserted.
             9 => {
                 let k = rng.below(x.len() + 1);
-                let s: &[u8] = *rng.pick(&[
-                    b"[".as_slice(),
-                    b"]",
-                    b"=",
-                    b"\"",
-                    b"{",
-                    b"\n[[species]]\n",
-                    b"\n[run]\n",
-                    b"#",
-                    b",",
-                    b"\n",
-                    b" ",
-                ]);
+                let s = *rng.pick::<&[u8]>(INSERTS);
                 x.splice(k..k, s.iter().copied());
             }
             // A long run of one character (long lines, long numbers).
@@ -558,10 +568,10 @@ rod 1.0 1.0 3.0 0.0 -0.1 0.0 0 0 0 1 0 1 1 1 3\n"
             if rod_names && let Err(e) = init::read_orientations(scene, &file, 4) {
                 messages.push(e.to_string());
             }
-            if !rod_names || count.is_multiple_of(25) {
-                if let Err(e) = run_scene(scene, &dir, None, &mut Quiet) {
-                    messages.push(e.to_string());
-                }
+            if (!rod_names || count.is_multiple_of(25))
+                && let Err(e) = run_scene(scene, &dir, None, &mut Quiet)
+            {
+                messages.push(e.to_string());
             }
             messages.iter().try_for_each(|m| message_ok(m))
         },
@@ -704,11 +714,7 @@ fn mutate_checkpoint(rng: &mut Rng, input: &[u8]) -> Vec<u8> {
             }
             // A varint (a length or a count) made huge.
             4 => {
-                let huge: &[u8] = *rng.pick(&[
-                    [0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0x01].as_slice(),
-                    &[0xff, 0xff, 0xff, 0xff, 0x0f],
-                    &[0x80, 0x80, 0x80, 0x80, 0x01],
-                ]);
+                let huge = *rng.pick::<&[u8]>(HUGE_VARINTS);
                 x.splice(at..at + 1, huge.iter().copied());
             }
             5 => x.truncate(at),
