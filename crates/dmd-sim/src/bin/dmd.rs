@@ -938,6 +938,13 @@ fn main() -> ExitCode {
                 file: scene.clone(),
             };
             if s.chains.is_some() || s.sweep.is_some() {
+                // Every point is set up before the first job runs (as `dmd check` does).
+                if let Err(e) =
+                    dmd_sim::run::check_setup(&s, &base, &source.text, &source.overrides)
+                {
+                    eprintln!("dmd: {}: {e}", scene.display());
+                    return exit_code(&e);
+                }
                 return run_ensemble(&scene, &s, source, &out, every, threads, quiet);
             }
             let options = RunOptions {

@@ -278,9 +278,17 @@ pub fn check_setup(
             scene.clone()
         };
         match run_or_set_up(&point, base, None, &mut Quiet, &RunOptions::default(), true) {
-            Err(RunError::SetUpOnly) => {}
+            Err(RunError::SetUpOnly) | Ok(_) => {}
+            Err(RunError::Scene(e)) if scene.sweep.is_some() => {
+                // Named as a point's error is when the point does not read.
+                let sw = scene.sweep.as_ref().expect("a sweep");
+                return Err(SceneError::invalid(
+                    format!("sweep.values[{k}]"),
+                    format!("with {} = {}: {e}", sw.key, sw.values[k]),
+                )
+                .into());
+            }
             Err(e) => return Err(e),
-            Ok(_) => {}
         }
     }
     Ok(())

@@ -6,7 +6,7 @@
 
 use std::path::{Path, PathBuf};
 
-use dmd_sim::run::{Quiet, run_scene};
+use dmd_sim::run::{Quiet, check_setup, run_scene};
 use dmd_sim::scene::Scene;
 use dmd_sim::smd_engine::{self, Engine};
 
@@ -33,10 +33,16 @@ fn first_error_line(path: &Path, overrides: &[String]) -> Option<String> {
                 Ok(_) => return None,
             }
         }
-        Ok((scene, base)) => match run_scene(&scene, &base, None, &mut Quiet) {
-            Err(e) => e.to_string(),
-            Ok(_) => return None,
-        },
+        // `dmd check`'s set-up (every point of a sweep), then the run.
+        Ok((scene, base)) => {
+            let text = std::fs::read_to_string(path).unwrap();
+            match check_setup(&scene, &base, &text, overrides)
+                .and_then(|()| run_scene(&scene, &base, None, &mut Quiet).map(|_| ()))
+            {
+                Err(e) => e.to_string(),
+                Ok(()) => return None,
+            }
+        }
     };
     Some(message.lines().next().unwrap_or("").to_owned())
 }
