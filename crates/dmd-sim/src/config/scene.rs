@@ -61,9 +61,9 @@ pub enum SceneError {
 }
 
 /// Longest word of a message quoted whole (longer ones, a value pasted by mistake, are cut).
-const LONGEST_WORD: usize = 160;
+pub const LONGEST_WORD: usize = 160;
 /// Longest line of a message quoted whole.
-const LONGEST_LINE: usize = 600;
+pub const LONGEST_LINE: usize = 600;
 
 /// A message part as shown: every word longer than [`LONGEST_WORD`] characters and every line
 /// longer than [`LONGEST_LINE`] cut with `…` and the count of characters left out, so that a
