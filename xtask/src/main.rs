@@ -7,12 +7,15 @@
 //! - `frontier [--quick]`: shorthand for `validate --only frontier [--quick]`, the error-against-cost
 //!   frontier of DMD and SMD on the paper's rods.
 //! - `bench [--only NAME,..]`: the criterion benchmarks of `benches/`.
+//! - `fuzz [--minutes M] [--only TARGET,..] [--seed S]`: the fuzz targets of the input surface
+//!   (scene, `--set`, XYZ start file, checkpoint), each for `M` minutes.
 //!
 //! xtask depends on nothing but std and compiles in seconds: validations are release-built
 //! examples of the crates they check, which print a Markdown fragment and exit non-zero when a
 //! check fails. This keeps the physics code in the crates that own it.
 
 mod ci;
+mod fuzz;
 mod report;
 mod validate;
 
@@ -30,6 +33,8 @@ commands:
                              error against cost on the paper's rods
   bench [--only NAME[,NAME..]] [-- CRITERION ARGS]
                              run the criterion benchmarks in benches/
+  fuzz [--minutes M] [--only TARGET[,TARGET..]] [--seed S]
+                             run the fuzz targets (scene, set, xyz, checkpoint), M minutes each
 ";
 
 fn main() -> ExitCode {
@@ -39,6 +44,7 @@ fn main() -> ExitCode {
         Some("validate") => validate::run(&args[1..]),
         Some("frontier") => frontier(&args[1..]),
         Some("bench") => ci::bench(&args[1..]),
+        Some("fuzz") => fuzz::run(&args[1..]),
         Some("-h" | "--help" | "help") => {
             print!("{USAGE}");
             Ok(())

@@ -806,7 +806,13 @@ fn main() -> ExitCode {
             set.extend(engine.map(|e| format!("engine={e}")));
             &set
         }) {
-            Ok((s, _)) => {
+            // Everything `dmd run` refuses before its first event is refused here too.
+            Ok((s, base)) => {
+                let text = std::fs::read_to_string(&scene).unwrap_or_default();
+                if let Err(e) = dmd_sim::run::check_setup(&s, &base, &text, &set) {
+                    eprintln!("dmd: {}: {e}", scene.display());
+                    return exit_code(&e);
+                }
                 println!(
                     "{}: a valid scene of {} bodies{}",
                     scene.display(),
@@ -884,6 +890,13 @@ fn main() -> ExitCode {
                 file: scene.clone(),
             };
             if s.chains.is_some() || s.sweep.is_some() {
+                // Every point is set up before the first job runs (as `dmd check` does).
+                if let Err(e) =
+                    dmd_sim::run::check_setup(&s, &base, &source.text, &source.overrides)
+                {
+                    eprintln!("dmd: {}: {e}", scene.display());
+                    return exit_code(&e);
+                }
                 return run_ensemble(&scene, &s, source, &out, every, threads, quiet);
             }
             let options = RunOptions {

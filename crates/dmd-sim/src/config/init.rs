@@ -179,7 +179,8 @@ fn xyz_frame(text: &str, index: i64, n: usize) -> Result<XyzFrame<'_>, String> {
                 }
             })?;
             starts.push(at);
-            at += count + 2;
+            // Saturating: a count near 2^64 ends the file, it does not wrap around.
+            at = at.saturating_add(count).saturating_add(2);
         } else {
             at += 1;
         }
@@ -260,7 +261,9 @@ fn column(comment: &str, name: &str, width: usize) -> Result<Option<usize>, Stri
             }
             return Ok(Some(at));
         }
-        at += count;
+        at = at
+            .checked_add(count)
+            .ok_or_else(|| format!("malformed Properties={props}"))?;
     }
     Ok(None)
 }

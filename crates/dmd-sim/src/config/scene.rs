@@ -32,10 +32,10 @@ pub enum SceneError {
         source: std::io::Error,
     },
     /// The text is not valid TOML.
-    #[error("scene is not valid TOML: {0}")]
+    #[error("scene is not valid TOML: {}", clip(.0))]
     Syntax(String),
     /// A key is unknown, missing, or has a value of the wrong type.
-    #[error("scene key `{key}`: {problem}")]
+    #[error("scene key `{}`: {}", clip(.key), clip(.problem))]
     Key {
         /// Dotted path of the key (`.` for the whole scene).
         key: String,
@@ -43,7 +43,7 @@ pub enum SceneError {
         problem: String,
     },
     /// A value is of the right type but not acceptable (alone or with others).
-    #[error("scene key `{key}`: {problem}")]
+    #[error("scene key `{}`: {}", clip(.key), clip(.problem))]
     Invalid {
         /// Dotted path of the key.
         key: String,
@@ -51,13 +51,51 @@ pub enum SceneError {
         problem: String,
     },
     /// A `--set` argument is malformed.
-    #[error("override `{arg}`: {problem}")]
+    #[error("override `{}`: {}", clip(.arg), clip(.problem))]
     Override {
         /// The argument as given.
         arg: String,
         /// What is wrong with it.
         problem: String,
     },
+}
+
+/// Longest word of a message quoted whole (longer ones, a value pasted by mistake, are cut).
+pub const LONGEST_WORD: usize = 160;
+/// Longest line of a message quoted whole.
+pub const LONGEST_LINE: usize = 600;
+
+/// A message part as shown: every word longer than [`LONGEST_WORD`] characters and every line
+/// longer than [`LONGEST_LINE`] cut with `…` and the count of characters left out, so that a
+/// message never echoes a huge input.
+pub fn clip(text: &str) -> String {
+    let mut out = String::with_capacity(text.len().min(4 * LONGEST_LINE));
+    for (k, line) in text.split('\n').enumerate() {
+        if k > 0 {
+            out.push('\n');
+        }
+        let mut shown = String::new();
+        for (w, word) in line.split(' ').enumerate() {
+            if w > 0 {
+                shown.push(' ');
+            }
+            let n = word.chars().count();
+            if n > LONGEST_WORD {
+                shown.extend(word.chars().take(LONGEST_WORD / 2));
+                shown.push_str(&format!("… ({} more characters)", n - LONGEST_WORD / 2));
+            } else {
+                shown.push_str(word);
+            }
+        }
+        let n = shown.chars().count();
+        if n > LONGEST_LINE {
+            out.extend(shown.chars().take(LONGEST_LINE));
+            out.push_str(&format!("… ({} more characters)", n - LONGEST_LINE));
+        } else {
+            out.push_str(&shown);
+        }
+    }
+    out
 }
 
 impl SceneError {

@@ -336,7 +336,15 @@ pub fn decode(bytes: &[u8]) -> Result<Checkpoint, Problem> {
     let crc = word(12);
     let payload_len = u64::from_le_bytes(bytes[16..24].try_into().expect("8 bytes"));
     let version_len = u16::from_le_bytes(bytes[24..26].try_into().expect("2 bytes")) as u64;
-    let expected = fixed as u64 + version_len + payload_len;
+    // Checked: a forged length near 2^64 must not wrap around to a small one.
+    let Some(expected) = (fixed as u64)
+        .checked_add(version_len)
+        .and_then(|x| x.checked_add(payload_len))
+    else {
+        return Err(Problem::Corrupted(format!(
+            "its header announces a payload of {payload_len} bytes, more than any file holds"
+        )));
+    };
     if (bytes.len() as u64) < expected {
         return Err(truncated(expected));
     }
@@ -358,6 +366,114 @@ pub fn decode(bytes: &[u8]) -> Result<Checkpoint, Problem> {
     }
     postcard::from_bytes(&bytes[version_end..])
         .map_err(|e| Problem::Inconsistent(format!("its contents do not decode: {e}")))
+}
+
+/// Checks the accumulated observables of a checkpoint against fresh ones the scene gives
+/// (`rdf`, `correlations`) for `n` bodies of `species`: the same settings, arrays of the sizes
+/// the settings give, time origins of the right length taken at past samples. The observables
+/// keep their fields private; they are read through their serialised form (a field renamed
+/// there fails the checkpoint tests).
+///
+/// # Errors
+/// What does not fit.
+pub fn check_observers(
+    saved: &ObserverState,
+    rdf: Option<&Rdf>,
+    correlations: Option<&Correlations>,
+    species: &[u32],
+    volume: f64,
+) -> Result<(), String> {
+    use serde_json::Value;
+    let n = species.len() as u64;
+    let num = |v: &Value, k: &str| v.get(k).and_then(Value::as_u64);
+    let len = |v: &Value, k: &str| v.get(k).and_then(Value::as_array).map(Vec::len);
+    let same = |a: &Value, b: &Value, keys: &[&str]| keys.iter().all(|k| a.get(k) == b.get(k));
+    if saved.rdf.is_some() != rdf.is_some() {
+        return Err("its g(r) does not match the scene's output.rdf".into());
+    }
+    if let (Some(s), Some(f)) = (&saved.rdf, rdf) {
+        let (s, f) = (json(s), json(f));
+        let samples = num(&s, "samples").unwrap_or(u64::MAX);
+        let bins = len(&f, "counts").unwrap_or(0);
+        let members: Option<Vec<u64>> = s
+            .get("members")
+            .and_then(Value::as_array)
+            .map(|m| m.iter().filter_map(Value::as_u64).collect());
+        let kinds = species.iter().map(|&x| x as usize + 1).max().unwrap_or(0);
+        let mut expected = vec![0u64; kinds];
+        for &x in species {
+            expected[x as usize] += 1;
+        }
+        let (members_ok, partial) = if samples == 0 {
+            (members.as_ref().is_some_and(Vec::is_empty), 0)
+        } else {
+            (
+                members.as_ref() == Some(&expected),
+                if kinds >= 2 {
+                    kinds * (kinds + 1) / 2 * bins
+                } else {
+                    0
+                },
+            )
+        };
+        let sampled_ok = samples == 0
+            || (num(&s, "n") == Some(n) && s.get("volume").and_then(Value::as_f64) == Some(volume));
+        if !(same(&s, &f, &["every", "r_max", "width"])
+            && len(&s, "counts") == Some(bins)
+            && len(&s, "partial") == Some(partial)
+            && members_ok
+            && sampled_ok
+            && num(&s, "seen").is_some_and(|seen| seen >= samples))
+        {
+            return Err("its g(r) does not fit the scene's output.rdf and bodies".into());
+        }
+    }
+    if saved.correlations.is_some() != correlations.is_some() {
+        return Err(
+            "its correlations do not match the scene's output.msd, vacf or \
+                    orientation_acf"
+                .into(),
+        );
+    }
+    if let (Some(s), Some(f)) = (&saved.correlations, correlations) {
+        let (s, f) = (json(s), json(f));
+        let lags = len(&f, "counts");
+        let samples = num(&s, "samples").unwrap_or(0);
+        let arrays_ok = ["msd", "vacf", "oacf1", "oacf2", "counts"]
+            .iter()
+            .all(|k| len(&s, k) == lags);
+        let origins_ok = s.get("origins").and_then(Value::as_array).is_some_and(|o| {
+            o.iter().all(|o| {
+                let l = |k: &str| len(o, k).map(|x| x as u64);
+                num(o, "sample").is_some_and(|k| k < samples)
+                    && l("r0") == Some(n)
+                    && l("v0") == Some(n)
+                    && matches!(l("s0"), Some(x) if x == 0 || x == n)
+            })
+        });
+        if !(same(
+            &s,
+            &f,
+            &[
+                "dt",
+                "lags",
+                "origin_every",
+                "want_msd",
+                "want_vacf",
+                "want_oacf",
+            ],
+        ) && arrays_ok
+            && origins_ok)
+        {
+            return Err("its correlations do not fit the scene's outputs and bodies".into());
+        }
+    }
+    Ok(())
+}
+
+/// A value's serialised form (`Null` if it has none).
+fn json<T: Serialize>(x: &T) -> serde_json::Value {
+    serde_json::to_value(x).unwrap_or(serde_json::Value::Null)
 }
 
 /// Decides when to save, and saves.

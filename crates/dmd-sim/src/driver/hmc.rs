@@ -188,6 +188,60 @@ pub struct Chain {
 }
 
 impl Chain {
+    /// Checks a chain read from a checkpoint against the scene's `settings` and `hmc.series`
+    /// (`keep_series`): the same settings, a histogram of their bins, and counts and series
+    /// that agree with each other.
+    ///
+    /// # Errors
+    /// What does not fit.
+    pub fn check_fits(&self, settings: &HmcSettings, keep_series: bool) -> Result<(), String> {
+        if self.settings != *settings {
+            return Err("its HMC settings are not the scene's [hmc]".into());
+        }
+        let s = &self.stats;
+        if s.histogram.len() != settings.histogram_bins {
+            return Err(format!(
+                "its ΔH histogram has {} bins, the scene {}",
+                s.histogram.len(),
+                settings.histogram_bins
+            ));
+        }
+        if self.series.is_some() != keep_series {
+            return Err("its series of segments does not match hmc.series".into());
+        }
+        let decided = [
+            s.accepted,
+            s.rejected_overlap,
+            s.rejected_energy,
+            s.rejected_non_finite,
+        ]
+        .into_iter()
+        .try_fold(0u64, u64::checked_add);
+        let segments = usize::try_from(s.segments).ok();
+        if decided != Some(s.segments)
+            || s.delta_h_finite > s.segments
+            || s.segments_with_misses > s.segments
+            || segments != Some(s.potential.len())
+            || segments != Some(s.kinetic.len())
+            || self
+                .series
+                .as_ref()
+                .is_some_and(|v| segments != Some(v.len()))
+            || s.segments > self.next_index
+        {
+            return Err("its HMC counts do not agree with each other".into());
+        }
+        if !(s.delta_h_sum.is_finite()
+            && s.delta_h_max_abs.is_finite()
+            && s.delta_h_max_abs >= 0.0
+            && s.exp_sum >= 0.0
+            && s.potential.iter().chain(&s.kinetic).all(|x| !x.is_nan()))
+        {
+            return Err("its HMC sums are not valid numbers".into());
+        }
+        Ok(())
+    }
+
     /// A chain with its generator seeded from `settings.seed`.
     pub fn new(settings: HmcSettings, keep_series: bool) -> Self {
         let rng = Xoshiro256PlusPlus::seed_from_u64(settings.seed ^ 0x4843_4d43_0000_0009);

@@ -31,6 +31,9 @@ pub enum RunError {
     /// Stopped after a checkpoint, as `RunOptions::halt_after_checkpoint` asked.
     #[error("halted after writing a checkpoint, as asked")]
     Halted,
+    /// Stopped after the set-up, as the set-up check of `dmd check` asks (nothing ran).
+    #[error("stopped after the set-up, as asked")]
+    SetUpOnly,
     /// Stopped by a signal ([`crate::driver::interrupt`]) at a re-basing, after saving this checkpoint
     /// (none for a run without an output folder).
     #[error("stopped by a signal{}", match .checkpoint {

@@ -43,6 +43,14 @@ use crate::driver::reporting::{PlotInfo, terrace_step, write_observables};
 use crate::engine::model::{HardSpheres, PairModel, Stepped};
 use crate::engine::schedule::Scheduler;
 use crate::engine::simulation::MAX_REBASE_EVENTS;
+
+/// How far (relative to the energy scale) a resumed state's tracked energies may be from the
+/// ones its velocities and pair levels give: the tolerance of the loop's own debug check.
+const RESUME_ENERGY_TOLERANCE: f64 = 1e-9;
+/// How far (relative) a resumed plain production run's energy may be from its recorded start.
+const RESUME_DRIFT: f64 = 1e-2;
+
+use crate::analysis::output::short;
 use crate::engine::simulation::{Andersen, LoopSettings, Progress, SetupError, Simulation, Stop};
 use crate::models::rotor::TopInertia;
 use crate::models::search::SearchStats;
@@ -243,11 +251,55 @@ pub fn run_scene_with(
     options: &RunOptions,
 ) -> Result<Summary, RunError> {
     let fault = scene.hmc.as_ref().is_some_and(|h| h.fault_fraction > 0.0);
-    let mut summary = set_up(scene, base, out, options, Running { reporter })?;
+    let mut summary = set_up(scene, base, out, options, false, Running { reporter })?;
     if fault {
         summary.model = "stepped (fault injection)".to_owned();
     }
     Ok(summary)
+}
+
+/// Everything `dmd run` checks of a scene before its first event, for `dmd check`: the scene's
+/// set-up (lattice or start file, box against the cut-off, skin, overlaps, the body model and
+/// its tables, the observables' sizes) is built and dropped, nothing runs and nothing is
+/// written. A scene of `[chains]` or `[sweep]` is set up point by point; a scene for the smd
+/// engine is left to its engine.
+///
+/// # Errors
+/// The [`RunError`] `dmd run` would stop with before its first event.
+pub fn check_setup(
+    scene: &Scene,
+    base: &Path,
+    text: &str,
+    overrides: &[String],
+) -> Result<(), RunError> {
+    if scene.engine == crate::driver::smd_engine::Engine::Smd {
+        return Ok(());
+    }
+    let points = scene.sweep.as_ref().map_or(1, |s| s.values.len());
+    for k in 0..points {
+        let point = if scene.sweep.is_some() {
+            scene.sweep_point(text, overrides, k)?
+        } else {
+            scene.clone()
+        };
+        let quiet = Running {
+            reporter: &mut Quiet,
+        };
+        match set_up(&point, base, None, &RunOptions::default(), true, quiet) {
+            Err(RunError::SetUpOnly) | Ok(_) => {}
+            Err(RunError::Scene(e)) if scene.sweep.is_some() => {
+                // Named as a point's error is when the point does not read.
+                let sw = scene.sweep.as_ref().expect("a sweep");
+                return Err(SceneError::invalid(
+                    format!("sweep.values[{k}]"),
+                    format!("with {} = {}: {e}", sw.key, sw.values[k]),
+                )
+                .into());
+            }
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(())
 }
 
 /// What a scene's simulation is built with besides its state ([`build_simulation`]).
@@ -295,7 +347,7 @@ pub fn build_simulation<U: UseSimulation>(
         resume,
         ..RunOptions::default()
     };
-    set_up(scene, base, None, &options, Building(user))
+    set_up(scene, base, None, &options, false, Building(user))
 }
 
 /// What [`set_up`] does with the model and queue it picked.
@@ -358,12 +410,14 @@ fn go_any_queue<G: Go, M: PairModel + Send + 'static>(
 }
 
 /// Everything of a run before its phases: the configuration, velocities, model and queue,
-/// handed to `g`.
+/// handed to `g`; with `set_up_only`, the run stops with [`RunError::SetUpOnly`] once its
+/// outputs are set up too ([`check_setup`]).
 fn set_up<G: Go>(
     scene: &Scene,
     base: &Path,
     out: Option<&Path>,
     options: &RunOptions,
+    set_up_only: bool,
     g: G,
 ) -> Result<G::Out, RunError> {
     if scene.engine == crate::driver::smd_engine::Engine::Smd {
@@ -449,6 +503,32 @@ fn set_up<G: Go>(
         skin,
         start_time: 0.0,
     };
+    if let Some((path, c)) = &options.resume {
+        // The loop's settings are the scene's: an edited scene or state would not continue
+        // the run it claims to.
+        let fresh = choose_skin(scene, plan.reach(), hard, &config).ok();
+        let (rebase, seed, _, _, _) = c.sim.settings;
+        let problem = if fresh != Some(skin) {
+            Some(format!(
+                "its neighbour-list skin {} is not the one the scene gives ({})",
+                short(skin),
+                fresh.map_or_else(|| "none".to_owned(), short)
+            ))
+        } else if rebase != settings.rebase_events || seed != settings.seed {
+            Some("its re-basing interval or seed is not the scene's".to_owned())
+        } else {
+            None
+        };
+        if let Some(m) = problem {
+            return Err(CheckpointError {
+                path: path.clone(),
+                problem: Problem::Inconsistent(
+                    crate::engine::simulation::StateError(m).to_string(),
+                ),
+            }
+            .into());
+        }
+    }
     if let Some(dir) = out {
         std::fs::create_dir_all(dir).map_err(|e| OutputError {
             path: dir.to_owned(),
@@ -475,6 +555,7 @@ fn set_up<G: Go>(
         options,
         smooth: std::cell::Cell::new(None),
         layout: layout_of(scene, &plan, &units),
+        set_up_only,
     };
     if fault > 0.0 {
         // Checked with the scene: fault injection is for sphere scenes.
@@ -746,6 +827,8 @@ struct Context<'a> {
     smooth: std::cell::Cell<Option<Box<dyn crate::analysis::smooth::Evaluate>>>,
     /// How trajectory frames draw each species.
     layout: Layout,
+    /// Stop with [`RunError::SetUpOnly`] once the simulation and its outputs' sizes are set up.
+    set_up_only: bool,
 }
 
 impl Context<'_> {
@@ -800,6 +883,39 @@ impl Context<'_> {
         }
     }
 
+    /// The checks of a state restored from a checkpoint that need the built simulation.
+    fn check_resumed_state<M: PairModel, Q: Scheduler>(
+        &self,
+        sim: &Simulation<M, Q>,
+        c: &Checkpoint,
+        faults: bool,
+    ) -> Result<(), String> {
+        if !sim.at_origin() {
+            return Err("it was not saved at a re-basing (its clocks are not all 0)".into());
+        }
+        if !faults {
+            sim.check_within(RESUME_ENERGY_TOLERANCE)?;
+        }
+        // A plain production run without a thermostat conserves energy: the state's energy
+        // is its start's within any drift a run can have.
+        if let (Stage::Production(_), None, None, Some((_, e0, _, _))) =
+            (c.stage, &self.scene.hmc, c.sim.thermostat, c.record.start)
+        {
+            let (k, u) = (sim.tracked_kinetic(), sim.tracked_potential());
+            let scale = k.abs().max(u.abs()).max(e0.abs()).max(f64::MIN_POSITIVE);
+            let drift = (k + u - e0).abs();
+            if drift.is_nan() || drift > RESUME_DRIFT * scale {
+                return Err(format!(
+                    "its energy {} differs from the {} it recorded at the start of production \
+                     by more than any run drifts",
+                    short(k + u),
+                    short(e0)
+                ));
+            }
+        }
+        Ok(())
+    }
+
     /// The loop in its initial state, or in the checkpoint's.
     fn simulation<M: PairModel, Q: Scheduler>(
         &self,
@@ -807,10 +923,26 @@ impl Context<'_> {
     ) -> Result<Simulation<M, Q>, RunError> {
         let mut sim = match &self.options.resume {
             Some((path, c)) => {
-                Simulation::from_state(model, &c.sim).map_err(|e| CheckpointError {
+                let sim = Simulation::from_state(model, &c.sim).map_err(|e| CheckpointError {
                     path: path.clone(),
                     problem: Problem::Inconsistent(e.to_string()),
-                })?
+                })?;
+                // The restored state must be a state of this scene's physics: lists, cells,
+                // levels against distances, no overlap, tracked energies (fault injection, a
+                // validation tool, leaves missed events in its states on purpose).
+                let fault = self
+                    .scene
+                    .hmc
+                    .as_ref()
+                    .is_some_and(|h| h.fault_fraction > 0.0);
+                self.check_resumed_state(&sim, c, fault)
+                    .map_err(|m| CheckpointError {
+                        path: path.clone(),
+                        problem: Problem::Inconsistent(
+                            crate::engine::simulation::StateError(m).to_string(),
+                        ),
+                    })?;
+                sim
             }
             None => Simulation::new(
                 self.config.lengths,
@@ -891,6 +1023,13 @@ impl Context<'_> {
             (None, Some(t), _) => Stop::Time(t),
             (None, None, None) => unreachable!("checked"),
         };
+        // Refused before equilibration, not after it.
+        if scene.output.rdf.is_some() {
+            rdf_r_max(scene, self.config.lengths)?;
+        }
+        if self.set_up_only {
+            return Err(RunError::SetUpOnly);
+        }
         reporter.start(&self.plan(andersen, eq_stop, hmc_eq, stop));
         if resume.is_none() && equilibrate {
             run.record.had_thermostat = andersen.is_some();
@@ -940,15 +1079,7 @@ impl Context<'_> {
         let mut observers = Observers::default();
         let lengths = self.config.lengths;
         if let Some(rdf) = &o.rdf {
-            let half = 0.5 * lengths.min_element();
-            let r_max = rdf.r_max.unwrap_or(half.min(5.0));
-            if r_max > half {
-                return Err(SceneError::invalid(
-                    "output.rdf.r_max",
-                    format!("{r_max} exceeds half the smallest box side ({half})"),
-                )
-                .into());
-            }
+            let r_max = rdf_r_max(scene, lengths)?;
             observers.rdf = Some(Rdf::new(rdf.bins as usize, r_max, rdf.every));
         }
         if o.msd.is_some() || o.vacf.is_some() || o.orientation_acf.is_some() {
@@ -1045,7 +1176,21 @@ impl Context<'_> {
                 Some(h) => Left::Segments(h.segments),
                 None => left_of(stop),
             });
-        } else if let Some((_, c)) = resume {
+        } else if let Some((path, c)) = resume {
+            let l = self.config.lengths;
+            crate::driver::checkpoint::check_observers(
+                &c.observers,
+                observers.rdf.as_ref(),
+                observers.correlations.as_ref(),
+                &self.config.species,
+                l.x * l.y * l.z,
+            )
+            .map_err(|m| CheckpointError {
+                path: path.clone(),
+                problem: Problem::Inconsistent(
+                    crate::engine::simulation::StateError(m).to_string(),
+                ),
+            })?;
             observers.rdf = c.observers.rdf.clone();
             observers.correlations = c.observers.correlations.clone();
             observers.series = c.observers.series.clone();
@@ -1473,6 +1618,91 @@ fn check_checkpoint_scene(
             )));
         }
     }
+    // The box, clocks and numbers of the state: the scene's box, every number finite.
+    let l = c.sim.lengths;
+    if !(l.is_finite() && l.min_element() > 0.0) {
+        return Err(bad(format!("its box {l} is not a box")));
+    }
+    if let Some(box_) = crate::config::init::box_lengths(scene)
+        && box_ != l
+    {
+        return Err(bad(format!("its box is {l}, the scene's {box_}")));
+    }
+    let finite = |x: f64| x.is_finite();
+    let (p0, p1, p2, p3, p4) = &c.sim.phase;
+    if !(finite(c.sim.epoch.value())
+        && c.sim.epoch.value() >= 0.0
+        && finite(c.sim.translational)
+        && [
+            *p0,
+            *p1,
+            p2.value(),
+            p3.value(),
+            p4.value(),
+            c.sim.translational_integral.value(),
+        ]
+        .into_iter()
+        .all(finite))
+    {
+        return Err(bad("its clock or phase sums are not finite".into()));
+    }
+    if let Some((k, e, p, scale)) = c.record.start
+        && !([k, e, scale].into_iter().chain(p).all(finite) && k >= 0.0 && scale >= 0.0)
+    {
+        return Err(bad(
+            "its record of the start of production is not finite".into()
+        ));
+    }
+    let (wall, cpu) = c.record.seconds;
+    if !(finite(wall) && finite(cpu) && wall >= 0.0 && cpu >= 0.0) {
+        return Err(bad("its record of the time spent is not finite".into()));
+    }
+    // The thermostat and the sampling interval of the state are the scene's.
+    if let Some((rate, temperature)) = c.sim.thermostat {
+        let ok = scene.thermostat.kind == ThermostatKind::Andersen
+            && scene.thermostat.rate == Some(rate)
+            && scene
+                .thermostat
+                .temperature
+                .unwrap_or(scene.init.temperature)
+                == temperature;
+        if !ok {
+            return Err(bad(format!(
+                "its thermostat (rate {}, temperature {}) is not the scene's",
+                short(rate),
+                short(temperature)
+            )));
+        }
+    }
+    if let Some(dt) = c.sim.sample_dt
+        && scene.output.sample_interval != Some(dt)
+    {
+        return Err(bad(format!(
+            "its sampling interval {} is not the scene's output.sample_interval",
+            short(dt)
+        )));
+    }
+    // What is left of the stage is at most the scene's phase.
+    let too_long = match c.stage {
+        // Between phases.
+        Stage::Equilibration(Left::Events(0)) | Stage::Production(Left::Events(0)) => false,
+        Stage::Equilibration(Left::Events(n)) => {
+            scene.run.equilibration_time.is_some() || n > scene.run.equilibration_events
+        }
+        Stage::Equilibration(Left::Time(t)) => scene
+            .run
+            .equilibration_time
+            .is_none_or(|e| t > e * (1.0 + 1e-9)),
+        Stage::Equilibration(Left::Segments(n)) => scene
+            .hmc
+            .as_ref()
+            .is_none_or(|h| n > h.equilibration_segments),
+        Stage::Production(Left::Segments(n)) => scene.hmc.as_ref().is_none_or(|h| n > h.segments),
+        Stage::Production(Left::Events(n)) => scene.run.events.is_none_or(|e| n > e),
+        Stage::Production(Left::Time(t)) => {
+            scene.run.events.is_some() || scene.run.time.is_none_or(|e| t > e * (1.0 + 1e-9))
+        }
+    };
     // The stage must be one this scene has (a hand-edited or foreign file must not reach a
     // broken invariant of the driver).
     let hmc = scene.hmc.is_some();
@@ -1493,8 +1723,19 @@ fn check_checkpoint_scene(
             if hmc { "with" } else { "without" }
         )));
     }
+    if too_long {
+        return Err(bad(format!(
+            "its stage {:?} has more left than the scene's run",
+            c.stage
+        )));
+    }
     if hmc != c.chain.is_some() {
         return Err(bad("its HMC chain does not match the scene's [hmc]".into()));
+    }
+    if let (Some(chain), Some(h)) = (&c.chain, &scene.hmc) {
+        chain
+            .check_fits(&hmc_settings(scene), h.series)
+            .map_err(bad)?;
     }
     if matches!(c.stage, Stage::Production(_)) && c.record.start.is_none() {
         return Err(bad(
@@ -1502,6 +1743,24 @@ fn check_checkpoint_scene(
         ));
     }
     Ok(())
+}
+
+/// The g(r) range of a scene with `output.rdf` in a box of `lengths`: at most half the box.
+fn rdf_r_max(scene: &Scene, lengths: DVec3) -> Result<f64, SceneError> {
+    let half = 0.5 * lengths.min_element();
+    let r_max = scene
+        .output
+        .rdf
+        .as_ref()
+        .and_then(|r| r.r_max)
+        .unwrap_or(half.min(5.0));
+    if r_max > half {
+        return Err(SceneError::invalid(
+            "output.rdf.r_max",
+            format!("{r_max} exceeds half the smallest box side ({half})"),
+        ));
+    }
+    Ok(r_max)
 }
 
 fn left_of(stop: Stop) -> Left {

@@ -1693,7 +1693,25 @@ where
     /// # Errors
     /// A description of the first violation.
     pub fn check(&self) -> Result<(), String> {
+        self.check_within(1e-9)
+    }
+
+    /// [`check`](Self::check) with the tracked energies allowed to differ from the recomputed
+    /// ones by `energy_tolerance` of the energy scale (a resumed checkpoint allows the round-off
+    /// of a long run's sums); also every list centre inside the box.
+    ///
+    /// # Errors
+    /// A description of the first violation.
+    pub fn check_within(&self, energy_tolerance: f64) -> Result<(), String> {
         let skin = self.skin2.sqrt();
+        for (i, c) in self.centres.iter().enumerate() {
+            if (0..3).any(|a| !(0.0..=self.lengths[a]).contains(&c[a])) {
+                return Err(format!(
+                    "body {i} has its list centre {c} outside the box {}",
+                    self.lengths
+                ));
+            }
+        }
         for (i, b) in self.bodies.iter().enumerate() {
             let r = b.position_at(self.now);
             let off = (r - self.centres[i]).length();
@@ -1758,15 +1776,22 @@ where
             err?;
         }
         let k = self.kinetic_energy();
-        if (k - self.kinetic).abs() > 1e-9 * k.abs().max(1.0) {
+        if (k - self.kinetic).abs() > energy_tolerance * k.abs().max(1.0) {
             return Err(format!(
                 "tracked kinetic energy {} differs from the velocities' {k}",
                 self.kinetic
             ));
         }
+        let kt = self.translational_kinetic();
+        if (kt - self.translational).abs() > energy_tolerance * k.abs().max(1.0) {
+            return Err(format!(
+                "tracked translational kinetic energy {} differs from the velocities' {kt}",
+                self.translational
+            ));
+        }
         let u = self.potential_energy();
         let scale = k.abs().max(self.potential.abs()).max(1.0);
-        if (u - self.potential).abs() > 1e-9 * scale {
+        if (u - self.potential).abs() > energy_tolerance * scale {
             return Err(format!(
                 "tracked potential energy {} differs from the stored levels' {u}",
                 self.potential

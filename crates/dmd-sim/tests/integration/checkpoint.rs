@@ -545,3 +545,229 @@ fn a_resumed_hmc_chain_of_rods_is_bit_identical_and_accepts_exact_segments() {
     let _ = std::fs::remove_dir_all(straight);
     let _ = std::fs::remove_dir_all(crashed);
 }
+
+/// `dmd resume` of `bytes` (written as `NAME.dmd` in `d`) exits with status 2 and a message
+/// that contains `expected`, and writes nothing.
+fn refused(d: &std::path::Path, name: &str, bytes: &[u8], expected: &str) {
+    let path = d.join(format!("{name}.dmd"));
+    std::fs::write(&path, bytes).unwrap();
+    let before: Vec<_> = std::fs::read_dir(d)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    let o = Command::new(env!("CARGO_BIN_EXE_dmd"))
+        .args(["resume", "--quiet"])
+        .arg(&path)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{name}: {err}");
+    assert!(err.contains(expected), "{name}: {err}");
+    assert_eq!(err.lines().count(), 1, "{name}: {err}");
+    let after: Vec<_> = std::fs::read_dir(d)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    assert_eq!(before, after, "{name}: files were written");
+}
+
+/// Checkpoints edited and sealed again with a valid CRC, as a forger (or a bug writing a wrong
+/// state) would make them: each check of the state against its scene refuses its edit with a
+/// message naming what is wrong, exit status 2, and no panic or run with wrong physics.
+#[test]
+fn forged_checkpoints_with_valid_crcs_are_refused_as_states() {
+    let d = dir("forged");
+    // A plain square well halted in production (no thermostat there), and a rods run.
+    let sw = SW.replace("rate = 1.0\n", "rate = 1.0\nduring = \"equilibration\"\n");
+    let e = run(
+        &sw,
+        &[],
+        &d,
+        &options(&sw, &[], Some(Every::Events(12000)), true),
+    )
+    .unwrap_err();
+    assert!(matches!(e, RunError::Halted));
+    let bytes = std::fs::read(d.join(checkpoint::FILE_NAME)).unwrap();
+    std::fs::remove_file(d.join(checkpoint::FILE_NAME)).unwrap();
+    let c = checkpoint::decode(&bytes).unwrap();
+    assert!(matches!(c.stage, checkpoint::Stage::Production(_)));
+    assert!(c.sim.thermostat.is_none() && !c.sim.levels.is_empty());
+    let seal = |c: &checkpoint::Checkpoint| checkpoint::encode_with_version(c, CODE_VERSION);
+    let edit = |f: &dyn Fn(&mut checkpoint::Checkpoint)| {
+        let mut b = c.clone();
+        f(&mut b);
+        seal(&b)
+    };
+    let n = c.sim.bodies.len();
+    let cases: Vec<(&str, Vec<u8>, &str)> = vec![
+        (
+            "nan-velocity",
+            edit(&|b| b.sim.bodies[3].v.y = f64::NAN),
+            "body 3 has a non-finite state",
+        ),
+        (
+            "centre-outside-box",
+            edit(&|b| {
+                let l = b.sim.lengths.x;
+                b.sim.bodies[5].r.x += 3.0 * l;
+                b.sim.centres[5].x += 3.0 * l;
+            }),
+            "body 5 has its list centre",
+        ),
+        (
+            "body-off-its-centre",
+            edit(&|b| b.sim.bodies[7].r.z += 0.9),
+            "from its list centre, beyond the skin",
+        ),
+        (
+            "level-dropped",
+            edit(&|b| {
+                b.sim.levels.remove(0);
+            }),
+            "is stored on level 0, its distance says level 1",
+        ),
+        (
+            "neighbour-list-emptied",
+            edit(&|b| {
+                b.sim.nbr_entries.clear();
+                b.sim.nbr_len = vec![0; n];
+            }),
+            "(list radius 1.8): listed by 0: false",
+        ),
+        (
+            "hard-core-grown-in-the-scene",
+            edit(&|b| {
+                b.source.text = b
+                    .source
+                    .text
+                    .replace("[[1.0, inf], [1.5, -1.0]]", "[[1.3, inf], [1.5, -1.0]]");
+            }),
+            "overlap: distance",
+        ),
+        (
+            "density-edited-in-the-scene",
+            edit(&|b| b.source.text = b.source.text.replace("density = 0.5", "density = 0.49")),
+            "its box is",
+        ),
+        (
+            "thermostat-edited-in-the-scene",
+            edit(&|b| {
+                b.source.text = b.source.text.replace("during = \"equilibration\"\n", "");
+                b.sim.thermostat = Some((1.0, 2.0));
+            }),
+            "its thermostat (rate 1, temperature 2) is not the scene's",
+        ),
+        (
+            "kinetic-energy",
+            edit(&|b| b.sim.kinetic *= 1.5),
+            "tracked kinetic energy",
+        ),
+        (
+            "potential-energy",
+            edit(&|b| b.sim.potential -= 1e3),
+            "tracked potential energy",
+        ),
+        (
+            "start-energy",
+            edit(&|b| {
+                if let Some(s) = &mut b.record.start {
+                    s.1 += 2e7;
+                }
+            }),
+            "it recorded at the start of production by more than any run drifts",
+        ),
+        (
+            "endless-stage",
+            edit(&|b| b.stage = checkpoint::Stage::Production(checkpoint::Left::Events(u64::MAX))),
+            "has more left than the scene's run",
+        ),
+        (
+            "thin-skin",
+            edit(&|b| b.sim.settings.3 = 1e-300),
+            "its neighbour-list skin 1e-300 is not the one the scene gives",
+        ),
+        (
+            "seed",
+            edit(&|b| b.sim.settings.1 ^= 1),
+            "its re-basing interval or seed is not the scene's",
+        ),
+        (
+            "infinite-record",
+            edit(&|b| b.record.seconds.0 = f64::INFINITY),
+            "its record of the time spent is not finite",
+        ),
+        (
+            "not-at-a-rebasing",
+            edit(&|b| b.sim.bodies[0].t = 0.25),
+            "it was not saved at a re-basing",
+        ),
+        (
+            "rdf-bins",
+            edit(&|b| {
+                b.observers.rdf = c.observers.rdf.clone().map(|r| {
+                    let mut v = serde_json::to_value(&r).unwrap();
+                    v["counts"].as_array_mut().unwrap().pop();
+                    serde_json::from_value(v).unwrap()
+                });
+            }),
+            "its g(r) does not fit",
+        ),
+        (
+            "correlation-origin-in-the-future",
+            edit(&|b| {
+                b.observers.correlations = c.observers.correlations.clone().map(|r| {
+                    let mut v = serde_json::to_value(&r).unwrap();
+                    v["origins"][0]["sample"] = serde_json::json!(u64::MAX);
+                    serde_json::from_value(v).unwrap()
+                });
+            }),
+            "its correlations do not fit",
+        ),
+        (
+            "length-field-wraps-around",
+            {
+                let mut x = bytes.clone();
+                x[16..24].copy_from_slice(&u64::MAX.to_le_bytes());
+                let crc = checkpoint::crc32(&x[16..]);
+                x[12..16].copy_from_slice(&crc.to_le_bytes());
+                x
+            },
+            "its header announces a payload of 18446744073709551615 bytes, more than any file \
+             holds",
+        ),
+    ];
+    for (name, data, expected) in cases {
+        refused(&d, name, &data, expected);
+    }
+    // The unedited checkpoint still resumes.
+    std::fs::write(d.join(checkpoint::FILE_NAME), &bytes).unwrap();
+    resume(&d.join(checkpoint::FILE_NAME));
+
+    // A rod's axis that is not a unit vector.
+    let d = dir("forged-rods");
+    let e = run(
+        RODS,
+        &[],
+        &d,
+        &options(RODS, &[], Some(Every::Events(3000)), true),
+    )
+    .unwrap_err();
+    assert!(matches!(e, RunError::Halted));
+    let c = checkpoint::read(&d.join(checkpoint::FILE_NAME)).unwrap();
+    let mut b = c.clone();
+    b.sim.model_extra[0] *= 2.0;
+    refused(&d, "rod-axis", &seal(&b), "body 0 cannot be restored");
+    let _ = std::fs::remove_dir_all(d);
+
+    // An HMC chain whose ΔH histogram lost a bin, or whose counts disagree.
+    let (d, bytes, _) = damaged_setup("forged-hmc");
+    std::fs::remove_file(d.join(checkpoint::FILE_NAME)).unwrap();
+    let c = checkpoint::decode(&bytes).unwrap();
+    let mut b = c.clone();
+    b.chain.as_mut().unwrap().stats.histogram.pop();
+    refused(&d, "hmc-histogram", &seal(&b), "its ΔH histogram has");
+    let mut b = c.clone();
+    b.chain.as_mut().unwrap().stats.accepted += 1;
+    refused(&d, "hmc-counts", &seal(&b), "its HMC counts do not agree");
+    let _ = std::fs::remove_dir_all(d);
+}

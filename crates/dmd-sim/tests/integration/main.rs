@@ -7,6 +7,7 @@ mod cli_robust;
 mod every_scene;
 mod flexible;
 mod flexible_scenes;
+mod fuzz;
 mod gsd_output;
 mod hmc;
 mod layers;

@@ -6,7 +6,7 @@
 
 use std::path::{Path, PathBuf};
 
-use dmd_sim::run::{Quiet, run_scene};
+use dmd_sim::run::{Quiet, check_setup, run_scene};
 use dmd_sim::scene::Scene;
 use dmd_sim::smd_engine::{self, Engine};
 
@@ -33,10 +33,16 @@ fn first_error_line(path: &Path, overrides: &[String]) -> Option<String> {
                 Ok(_) => return None,
             }
         }
-        Ok((scene, base)) => match run_scene(&scene, &base, None, &mut Quiet) {
-            Err(e) => e.to_string(),
-            Ok(_) => return None,
-        },
+        // `dmd check`'s set-up (every point of a sweep), then the run.
+        Ok((scene, base)) => {
+            let text = std::fs::read_to_string(path).unwrap();
+            match check_setup(&scene, &base, &text, overrides)
+                .and_then(|()| run_scene(&scene, &base, None, &mut Quiet).map(|_| ()))
+            {
+                Err(e) => e.to_string(),
+                Ok(()) => return None,
+            }
+        }
     };
     Some(message.lines().next().unwrap_or("").to_owned())
 }
@@ -70,7 +76,8 @@ fn every_bad_scene_gets_its_exact_message() {
 }
 
 /// The command gives every scene of the corpus exit status 2 (a bad scene, docs/USER-GUIDE.md)
-/// and the same first line, whether the scene fails when it is read or when it is set up.
+/// and the same first line, whether the scene fails when it is read or when it is set up; `dmd
+/// check` gives the same.
 #[test]
 fn the_command_refuses_every_bad_scene_with_exit_status_2() {
     let out = std::env::temp_dir().join(format!("dmd-bad-scenes-{}", std::process::id()));
@@ -95,6 +102,25 @@ fn the_command_refuses_every_bad_scene_with_exit_status_2() {
         if o.status.code() != Some(2) || first != want {
             failures.push(format!(
                 "{}: exit {:?}\n  expected: {want}\n  got:      {first}",
+                path.file_name().unwrap().to_string_lossy(),
+                o.status.code()
+            ));
+        }
+        // `dmd check` refuses it the same way: it sets the scene up as `dmd run` does
+        // (scenes for the smd engine are set up by that engine's run alone).
+        if text.contains("engine = \"smd\"") {
+            continue;
+        }
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_dmd"))
+            .arg("check")
+            .arg(path)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        let first = err.lines().next().unwrap_or("");
+        if o.status.code() != Some(2) || first != want {
+            failures.push(format!(
+                "dmd check {}: exit {:?}\n  expected: {want}\n  got:      {first}",
                 path.file_name().unwrap().to_string_lossy(),
                 o.status.code()
             ));
