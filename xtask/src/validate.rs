@@ -112,6 +112,14 @@ pub(crate) const CHECKS: &[Check] = &[
         quick: &["--quick"],
     },
     Check {
+        name: "errors",
+        title: "Error bars: the scatter of independent runs against the errors they report (hard spheres and rods)",
+        package: "dmd-sim",
+        example: "validate_errors",
+        full: &[],
+        quick: &["--quick"],
+    },
+    Check {
         name: "collide",
         title: "Impulse rules: conservation, constraints, reversibility and cross-check statistics",
         package: "dmd-collide",

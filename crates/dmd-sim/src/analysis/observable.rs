@@ -7,6 +7,7 @@
 
 use glam::DVec3;
 
+use crate::analysis::block::{BlockEstimate, Blocks};
 use crate::analysis::pairs::{for_each_pair, wrap};
 use crate::engine::simulation::{Sampler, View};
 
@@ -33,6 +34,12 @@ pub struct Rdf {
     /// Counts of every pair of species `a ≤ b` ([`pair_index`]), `bins` each; empty for one
     /// species.
     partial: Vec<u64>,
+    /// Each bin's `g` of every evaluated configuration, blocked in sample order: the
+    /// error of `g(r)` per bin.
+    blocks: Vec<Blocks>,
+    /// The current configuration's counts (scratch, kept to save an allocation a sample).
+    #[serde(skip)]
+    scratch: Vec<u64>,
 }
 
 /// Index of the unordered pair of species `a ≤ b` among `kinds` species: `(0,0), (0,1), …,
@@ -77,6 +84,8 @@ impl Rdf {
             volume: 0.0,
             members: Vec::new(),
             partial: Vec::new(),
+            blocks: vec![Blocks::default(); bins],
+            scratch: Vec::new(),
         }
     }
 
@@ -114,7 +123,9 @@ impl Rdf {
         self.samples += 1;
         let r2max = self.r_max * self.r_max;
         let inv_w = 1.0 / self.width;
-        let counts = &mut self.counts;
+        let mut counts = std::mem::take(&mut self.scratch);
+        counts.clear();
+        counts.resize(bins, 0);
         let partial = &mut self.partial;
         for_each_pair(pos, l, self.r_max, |i, j, d| {
             let r2 = d.length_squared();
@@ -129,13 +140,37 @@ impl Rdf {
                 }
             }
         });
+        // This configuration's g in every bin: `table` is their mean (same volume each time).
+        let pairs = 0.5 * n as f64 * (n as f64 - 1.0);
+        self.blocks.resize_with(bins, Blocks::default);
+        for (k, &c) in counts.iter().enumerate() {
+            self.counts[k] += c;
+            let ideal = pairs * self.shell_volume(k) / self.volume;
+            self.blocks[k].push(ratio(c, ideal));
+        }
+        self.scratch = counts;
+    }
+
+    /// Volume of the shell of bin `k`.
+    fn shell_volume(&self, k: usize) -> f64 {
+        let (a, b) = (k as f64 * self.width, (k + 1) as f64 * self.width);
+        4.0 / 3.0 * std::f64::consts::PI * (b * b * b - a * a * a)
+    }
+
+    /// The block-average error of `g(r)` in every bin (the rows of [`table`](Self::table)),
+    /// from the `g` of each evaluated configuration in sample order; NaN with fewer than 16
+    /// configurations.
+    pub fn errors(&self) -> Vec<f64> {
+        self.blocks.iter().map(|b| b.estimate().error).collect()
     }
 
     /// Volume of the shell of bin `k` times the samples taken.
     fn shell(&self, k: usize) -> (f64, f64) {
         let (a, b) = (k as f64 * self.width, (k + 1) as f64 * self.width);
-        let shell = 4.0 / 3.0 * std::f64::consts::PI * (b * b * b - a * a * a);
-        (0.5 * (a + b), shell * self.samples as f64 / self.volume)
+        (
+            0.5 * (a + b),
+            self.shell_volume(k) * self.samples as f64 / self.volume,
+        )
     }
 
     /// Rows `(r at bin centre, g(r))`.
@@ -212,6 +247,10 @@ struct Origin {
     r0: Vec<DVec3>,
     v0: Vec<DVec3>,
     s0: Vec<DVec3>,
+    /// This origin's own `D` from the MSD and from the VACF, summed lag by lag with the
+    /// weights of [`Correlations::diffusion_weights`].
+    d_msd: f64,
+    d_vacf: f64,
 }
 
 /// Mean-square displacement, velocity autocorrelation and (for rods) the long-axis
@@ -232,6 +271,16 @@ pub struct Correlations {
     want_msd: bool,
     want_vacf: bool,
     want_oacf: bool,
+    /// The value of every origin at each lag, blocked in origin order (MSD, VACF, and the two
+    /// orientational correlations; empty when not asked for): the errors of the tables.
+    msd_blocks: Vec<Blocks>,
+    vacf_blocks: Vec<Blocks>,
+    oacf1_blocks: Vec<Blocks>,
+    oacf2_blocks: Vec<Blocks>,
+    /// Each origin's own `D` from the MSD and from the VACF, pushed when its last lag is
+    /// sampled, blocked in origin order.
+    d_msd_blocks: Blocks,
+    d_vacf_blocks: Blocks,
 }
 
 impl Correlations {
@@ -265,7 +314,38 @@ impl Correlations {
             want_msd,
             want_vacf,
             want_oacf,
+            msd_blocks: vec![Blocks::default(); if want_msd { lags } else { 0 }],
+            vacf_blocks: vec![Blocks::default(); if want_vacf { lags } else { 0 }],
+            oacf1_blocks: vec![Blocks::default(); if want_oacf { lags } else { 0 }],
+            oacf2_blocks: vec![Blocks::default(); if want_oacf { lags } else { 0 }],
+            d_msd_blocks: Blocks::default(),
+            d_vacf_blocks: Blocks::default(),
         }
+    }
+
+    /// The weights `w_k` with which `D = Σ_k w_k c(k·dt)` of a full table, `c` the MSD or the
+    /// VACF: the least-squares slope over the second half of the lags over 6 (as
+    /// [`msd_fit`]), and the trapezoids of the Green–Kubo integral over 3. Zero weights where
+    /// a table is too short for its estimate.
+    fn diffusion_weights(&self, k: usize) -> (f64, f64) {
+        let lags = self.lags;
+        let from = lags / 2;
+        let m = (lags - from) as f64;
+        let msd = if m >= 2.0 && k >= from {
+            // Lags `from..lags`: mean `t̄`, `Sxx = Σ (t − t̄)²` in closed form.
+            let mean = 0.5 * (from + lags - 1) as f64;
+            let sxx = m * (m * m - 1.0) / 12.0;
+            (k as f64 - mean) / sxx / self.dt / 6.0
+        } else {
+            0.0
+        };
+        let vacf = if lags >= 2 {
+            let end = k == 0 || k == lags - 1;
+            (if end { 0.5 } else { 1.0 }) * self.dt / 3.0
+        } else {
+            0.0
+        };
+        (msd, vacf)
     }
 
     fn sample(&mut self, view: &View<'_>) {
@@ -282,20 +362,40 @@ impl Correlations {
                 } else {
                     Vec::new()
                 },
+                d_msd: 0.0,
+                d_vacf: 0.0,
             });
         }
         let lags = self.lags as u64;
         self.origins.retain(|o| k - o.sample < lags);
         let now: Vec<DVec3> = (0..n).map(|i| view.unwrapped(i)).collect();
-        for o in &self.origins {
+        let mut origins = std::mem::take(&mut self.origins);
+        for o in &mut origins {
             let lag = (k - o.sample) as usize;
             let (mut m, mut c) = (0.0, 0.0);
             for (i, b) in view.bodies.iter().enumerate() {
                 m += (now[i] - o.r0[i]).length_squared();
                 c += b.v.dot(o.v0[i]);
             }
-            self.msd[lag] += m / n as f64;
-            self.vacf[lag] += c / n as f64;
+            let (m, c) = (m / n as f64, c / n as f64);
+            self.msd[lag] += m;
+            self.vacf[lag] += c;
+            let (w_msd, w_vacf) = self.diffusion_weights(lag);
+            o.d_msd += w_msd * m;
+            o.d_vacf += w_vacf * c;
+            if self.want_msd {
+                self.msd_blocks[lag].push(m);
+            }
+            if self.want_vacf {
+                self.vacf_blocks[lag].push(c);
+            }
+            if lag + 1 == self.lags {
+                // Why per origin: each origin's D is its own table's linear functional, so the
+                // pooled D is (nearly) their mean, and blocking them in origin order absorbs
+                // the overlap of consecutive origins' windows.
+                self.d_msd_blocks.push(o.d_msd);
+                self.d_vacf_blocks.push(o.d_vacf);
+            }
             if self.want_oacf && o.s0.len() == view.axes.len() && !o.s0.is_empty() {
                 let (mut c1, mut c2) = (0.0, 0.0);
                 for (a, b) in o.s0.iter().zip(&view.axes) {
@@ -306,9 +406,64 @@ impl Correlations {
                 let k = o.s0.len() as f64;
                 self.oacf1[lag] += c1 / k;
                 self.oacf2[lag] += c2 / k;
+                self.oacf1_blocks[lag].push(c1 / k);
+                self.oacf2_blocks[lag].push(c2 / k);
             }
             self.counts[lag] += 1;
         }
+        self.origins = origins;
+    }
+
+    /// The block-average errors of the rows of `table` from `blocks` (NaN for a lag with fewer
+    /// than 16 origins).
+    fn errors_of(&self, blocks: &[Blocks]) -> Vec<f64> {
+        (0..self.lags)
+            .filter(|&k| self.counts[k] > 0)
+            .map(|k| blocks.get(k).map_or(f64::NAN, |b| b.estimate().error))
+            .collect()
+    }
+
+    /// The error of each row of [`msd_table`](Self::msd_table): block averages over the time
+    /// origins, in their order.
+    pub fn msd_errors(&self) -> Vec<f64> {
+        self.errors_of(&self.msd_blocks)
+    }
+
+    /// The error of each row of [`vacf_table`](Self::vacf_table), as [`msd_errors`](Self::msd_errors).
+    pub fn vacf_errors(&self) -> Vec<f64> {
+        self.errors_of(&self.vacf_blocks)
+    }
+
+    /// The errors of each row of [`oacf_table`](Self::oacf_table), as
+    /// [`msd_errors`](Self::msd_errors): `(⟨s(0)·s(t)⟩, ⟨P₂⟩)`.
+    pub fn oacf_errors(&self) -> Vec<(f64, f64)> {
+        self.errors_of(&self.oacf1_blocks)
+            .into_iter()
+            .zip(self.errors_of(&self.oacf2_blocks))
+            .collect()
+    }
+
+    /// `D` from the MSD of every time origin that has reached the last lag, with its
+    /// block-average error over those origins in their order (NaN with fewer than 16).
+    pub fn diffusion_from_msd_blocks(&self) -> BlockEstimate {
+        self.d_msd_blocks.estimate()
+    }
+
+    /// `D` from the VACF of every time origin that has reached the last lag, as
+    /// [`diffusion_from_msd_blocks`](Self::diffusion_from_msd_blocks).
+    pub fn diffusion_from_vacf_blocks(&self) -> BlockEstimate {
+        self.d_vacf_blocks.estimate()
+    }
+
+    /// The error of [`diffusion_from_msd`](Self::diffusion_from_msd) (see
+    /// [`diffusion_from_msd_blocks`](Self::diffusion_from_msd_blocks)); `None` unless finite.
+    pub fn diffusion_from_msd_error(&self) -> Option<f64> {
+        Some(self.d_msd_blocks.estimate().error).filter(|e| e.is_finite())
+    }
+
+    /// The error of [`diffusion_from_vacf`](Self::diffusion_from_vacf); `None` unless finite.
+    pub fn diffusion_from_vacf_error(&self) -> Option<f64> {
+        Some(self.d_vacf_blocks.estimate().error).filter(|e| e.is_finite())
     }
 
     /// Rows `(lag, MSD)` of the lags with data.

@@ -259,6 +259,10 @@ pub struct Samples {
 pub struct SampleSummary {
     /// Kinetic temperature.
     pub temperature: BlockEstimate,
+    /// Translational temperature.
+    pub translational_temperature: BlockEstimate,
+    /// Rotational temperature (bodies with rotational degrees of freedom).
+    pub rotational_temperature: Option<BlockEstimate>,
     /// Potential energy per body (the engine's own).
     pub potential_per_body: BlockEstimate,
     /// Pressure per sampling interval (the engine's own).
@@ -305,9 +309,11 @@ impl Samples {
         &self.rows
     }
 
-    /// Means and errors over the samples of `n` bodies (the smooth ones over the samples that
-    /// evaluated them, every `output.smooth_every`-th).
-    pub fn summary(&self, n: usize) -> SampleSummary {
+    /// Means and errors over the samples of `n` bodies with `dof` degrees of freedom of which
+    /// `rotational_dof` rotational (the smooth ones over the samples that evaluated them,
+    /// every `output.smooth_every`-th). A sample's rotational temperature is
+    /// `(T dof − T_t (dof − rotational_dof)) / rotational_dof`.
+    pub fn summary(&self, n: usize, dof: f64, rotational_dof: f64) -> SampleSummary {
         let col = |f: &dyn Fn(&SampleRow) -> f64| -> Vec<f64> { self.rows.iter().map(f).collect() };
         let smooth_col = |f: &dyn Fn(&SampleRow) -> f64| -> Vec<f64> {
             self.rows
@@ -324,6 +330,13 @@ impl Samples {
             .collect();
         SampleSummary {
             temperature: block_average(&col(&|r| r.temperature)),
+            translational_temperature: block_average(&col(&|r| r.translational_temperature)),
+            rotational_temperature: (rotational_dof > 0.0).then(|| {
+                let t_dof = dof - rotational_dof;
+                block_average(&col(&|r| {
+                    (r.temperature * dof - r.translational_temperature * t_dof) / rotational_dof
+                }))
+            }),
             potential_per_body: block_average(&col(&|r| r.potential / nf)),
             pressure: block_average(&pressures),
             potential_smooth_per_body: smooth

@@ -536,10 +536,18 @@ fn print_summary(s: &Summary, out: &Path, terminal: Option<&Terminal>) {
     if let Some(rot) = s.rotational_temperature {
         temperature.push(format!(
             "translational {} {}",
-            sig(s.translational_temperature, 5),
+            pm(
+                s.translational_temperature,
+                s.translational_temperature_error,
+                5
+            ),
             u.temperature
         ));
-        temperature.push(format!("rotational {} {}", sig(rot, 5), u.temperature));
+        temperature.push(format!(
+            "rotational {} {}",
+            pm(rot, s.rotational_temperature_error, 5),
+            u.temperature
+        ));
     }
     list("temperature", &temperature);
     line(
@@ -607,7 +615,11 @@ fn print_summary(s: &Summary, out: &Path, terminal: Option<&Terminal>) {
         checks.push(format!("largest relative bond error {b:.1e}"));
     }
     list("checks", &checks);
-    print_diffusion(s.diffusion_msd, s.diffusion_vacf, u);
+    print_diffusion(
+        (s.diffusion_msd, s.diffusion_msd_error),
+        (s.diffusion_vacf, s.diffusion_vacf_error),
+        u,
+    );
     if let Some(h) = &s.hmc {
         line(
             "hmc",
@@ -649,13 +661,17 @@ fn print_summary(s: &Summary, out: &Path, terminal: Option<&Terminal>) {
 }
 
 /// The diffusion coefficients a run measured.
-fn print_diffusion(msd: Option<f64>, vacf: Option<f64>, u: &UnitNames) {
+fn print_diffusion(
+    msd: (Option<f64>, Option<f64>),
+    vacf: (Option<f64>, Option<f64>),
+    u: &UnitNames,
+) {
     let mut d = Vec::new();
-    if let Some(x) = msd {
-        d.push(format!("{} {} (MSD)", sig(x, 4), u.diffusion));
+    if let (Some(x), e) = msd {
+        d.push(format!("{} {} (MSD)", pm(x, e, 4), u.diffusion));
     }
-    if let Some(x) = vacf {
-        d.push(format!("{} {} (VACF)", sig(x, 4), u.diffusion));
+    if let (Some(x), e) = vacf {
+        d.push(format!("{} {} (VACF)", pm(x, e, 4), u.diffusion));
     }
     if !d.is_empty() {
         list("diffusion", &d);
@@ -719,10 +735,18 @@ fn print_smd_summary(s: &SmdSummary, out: &Path, terminal: Option<&Terminal>) {
     if let Some(rot) = s.rotational_temperature {
         temperature.push(format!(
             "translational {} {}",
-            sig(s.translational_temperature, 5),
+            pm(
+                s.translational_temperature,
+                Some(s.translational_temperature_error),
+                5
+            ),
             u.temperature
         ));
-        temperature.push(format!("rotational {} {}", sig(rot, 5), u.temperature));
+        temperature.push(format!(
+            "rotational {} {}",
+            pm(rot, s.rotational_temperature_error, 5),
+            u.temperature
+        ));
     }
     list("temperature", &temperature);
     line(
@@ -770,7 +794,11 @@ fn print_smd_summary(s: &SmdSummary, out: &Path, terminal: Option<&Terminal>) {
             ),
         ],
     );
-    print_diffusion(s.diffusion_msd, s.diffusion_vacf, u);
+    print_diffusion(
+        (s.diffusion_msd, s.diffusion_msd_error),
+        (s.diffusion_vacf, s.diffusion_vacf_error),
+        u,
+    );
     if !s.ignored_keys.is_empty() {
         let mut keys = vec![format!(
             "ignored (event-driven only): {}",

@@ -46,7 +46,7 @@ use crate::models::search::SearchStats;
 /// First bytes of every checkpoint.
 pub const MAGIC: &[u8; 8] = b"\x89DMD-CK\n";
 /// The layout version this `dmd` writes and reads.
-pub const FORMAT_VERSION: u32 = 5;
+pub const FORMAT_VERSION: u32 = 6;
 /// The `dmd` version written into checkpoints.
 pub const CODE_VERSION: &str = env!("CARGO_PKG_VERSION");
 /// The checkpoint's file name in the output folder.

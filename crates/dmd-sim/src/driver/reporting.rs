@@ -280,8 +280,12 @@ pub(crate) fn write_observables(
                 .cloned()
                 .unwrap_or_else(|| format!("species{k}"))
         };
-        let mut header = strings(&["r", "g"]);
-        let mut rows: Vec<Vec<f64>> = t.iter().map(|&(r, g)| vec![r, g]).collect();
+        let mut header = strings(&["r", "g", "g_error"]);
+        let mut rows: Vec<Vec<f64>> = t
+            .iter()
+            .zip(rdf.errors())
+            .map(|(&(r, g), e)| vec![r, g, e])
+            .collect();
         let mut curves = vec![Line::new(
             if partials.is_empty() {
                 String::new()
@@ -325,8 +329,11 @@ pub(crate) fn write_observables(
             }
             table(
                 "msd",
-                &strings(&["t", "msd"]),
-                t.iter().map(|&(x, y)| vec![x, y]).collect(),
+                &strings(&["t", "msd", "msd_error"]),
+                t.iter()
+                    .zip(c.msd_errors())
+                    .map(|(&(x, y), e)| vec![x, y, e])
+                    .collect(),
                 Some(plot(
                     "Mean-square displacement",
                     format!("t ({})", au.time),
@@ -340,8 +347,17 @@ pub(crate) fn write_observables(
             let c0 = t.first().map(|p| p.1).unwrap_or(1.0);
             table(
                 "vacf",
-                &strings(&["t", "vacf", "vacf_normalised"]),
-                t.iter().map(|&(x, y)| vec![x, y, y / c0]).collect(),
+                &strings(&[
+                    "t",
+                    "vacf",
+                    "vacf_error",
+                    "vacf_normalised",
+                    "vacf_normalised_error",
+                ]),
+                t.iter()
+                    .zip(c.vacf_errors())
+                    .map(|(&(x, y), e)| vec![x, y, e, y / c0, e / c0])
+                    .collect(),
                 Some(plot(
                     "Velocity autocorrelation (normalised)",
                     format!("t ({})", au.time),
@@ -366,8 +382,11 @@ pub(crate) fn write_observables(
             let t = c.oacf_table();
             table(
                 "oacf",
-                &strings(&["t", "s0_dot_st", "p2"]),
-                t.iter().map(|&(x, a, b)| vec![x, a, b]).collect(),
+                &strings(&["t", "s0_dot_st", "s0_dot_st_error", "p2", "p2_error"]),
+                t.iter()
+                    .zip(c.oacf_errors())
+                    .map(|(&(x, a, b), (ea, eb))| vec![x, a, ea, b, eb])
+                    .collect(),
                 Some(plot(
                     "Long-axis orientational autocorrelation",
                     format!("t ({})", au.time),

@@ -191,8 +191,14 @@ pub struct Summary {
     /// Translational temperature `2⟨K_trans⟩/(3N − 3)` (rods; equal to `temperature` for
     /// spheres).
     pub translational_temperature: f64,
+    /// Block-average error of `translational_temperature`, from the instantaneous one at every
+    /// sample (as `temperature_error`).
+    pub translational_temperature_error: Option<f64>,
     /// Rotational temperature `⟨K_rot⟩/N` of rods (two degrees of freedom each).
     pub rotational_temperature: Option<f64>,
+    /// Block-average error of `rotational_temperature`, from the instantaneous one at every
+    /// sample.
+    pub rotational_temperature_error: Option<f64>,
     /// Queue used.
     pub queue: String,
     /// Entries pushed into the scheduler (each body's earliest event, re-set at every change).
@@ -206,8 +212,14 @@ pub struct Summary {
     pub requeued: u64,
     /// Self-diffusion coefficient from the MSD slope (when `output.msd` is on).
     pub diffusion_msd: Option<f64>,
+    /// Its error: each time origin's own `D` (the same fit on that origin's MSD alone),
+    /// block-averaged over the origins in their order (`null` with fewer than 16 origins that
+    /// reached the last lag).
+    pub diffusion_msd_error: Option<f64>,
     /// Self-diffusion coefficient from the Green–Kubo VACF integral (when `output.vacf` is on).
     pub diffusion_vacf: Option<f64>,
+    /// Its error, as `diffusion_msd_error`.
+    pub diffusion_vacf_error: Option<f64>,
     /// The seed.
     pub seed: u64,
     /// Files written besides `summary.json`.
@@ -1292,7 +1304,10 @@ impl Context<'_> {
         .map(|(k, v)| (k.to_owned(), v))
         .collect();
         let qs = sim.schedule_stats();
-        let sampled = observers.samples.as_ref().map(|s| s.summary(n as usize));
+        let sampled = observers
+            .samples
+            .as_ref()
+            .map(|s| s.summary(n as usize, dof, sim.model().rotational_dof()));
         let mut summary = Summary {
             engine: "dmd".to_owned(),
             events: counters.events,
@@ -1363,8 +1378,17 @@ impl Context<'_> {
             verified_misses: search.filter(|s| s.verified > 0).map(|s| s.verify_misses),
             search,
             translational_temperature: u.temperature_out(kt_trans),
+            translational_temperature_error: sampled
+                .map(|s| s.translational_temperature.error)
+                .filter(|e| e.is_finite())
+                .map(|e| u.temperature_out(e)),
             rotational_temperature: (rot_dof > 0.0)
                 .then(|| u.temperature_out(2.0 * mean_rot / rot_dof)),
+            rotational_temperature_error: sampled
+                .and_then(|s| s.rotational_temperature)
+                .map(|b| b.error)
+                .filter(|e| e.is_finite())
+                .map(|e| u.temperature_out(e)),
             queue: match scene.run.queue {
                 QueueKind::Bounded => "bounded",
                 QueueKind::Heap => "heap",
@@ -1385,6 +1409,16 @@ impl Context<'_> {
                 .as_ref()
                 .filter(|c| c.wants_vacf())
                 .and_then(Correlations::diffusion_from_vacf),
+            diffusion_msd_error: observers
+                .correlations
+                .as_ref()
+                .filter(|c| c.wants_msd())
+                .and_then(Correlations::diffusion_from_msd_error),
+            diffusion_vacf_error: observers
+                .correlations
+                .as_ref()
+                .filter(|c| c.wants_vacf())
+                .and_then(Correlations::diffusion_from_vacf_error),
             seed: scene.seed,
             files: Vec::new(),
             hmc: run

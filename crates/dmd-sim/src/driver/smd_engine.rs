@@ -97,8 +97,12 @@ pub struct SmdSummary {
     pub temperature_start: f64,
     /// Mean translational temperature.
     pub translational_temperature: f64,
+    /// Its block-average error.
+    pub translational_temperature_error: f64,
     /// Mean rotational temperature (rods and tops).
     pub rotational_temperature: Option<f64>,
+    /// Its block-average error.
+    pub rotational_temperature_error: Option<f64>,
     /// Mean virial pressure `(N kT_t + W/3)/V` of the smoothed potential.
     pub pressure: f64,
     /// Its block-average error.
@@ -161,8 +165,12 @@ pub struct SmdSummary {
     pub smoothing: [f64; 2],
     /// Self-diffusion coefficient from the MSD slope (when `output.msd` is on).
     pub diffusion_msd: Option<f64>,
+    /// Its error, from the time origins blocked (as the event-driven engine's).
+    pub diffusion_msd_error: Option<f64>,
     /// Self-diffusion coefficient from the Green–Kubo VACF integral (when `output.vacf` is on).
     pub diffusion_vacf: Option<f64>,
+    /// Its error, as `diffusion_msd_error`.
+    pub diffusion_vacf_error: Option<f64>,
     /// The seed.
     pub seed: u64,
     /// Scene keys this engine ignored (they belong to the event-driven engine).
@@ -709,6 +717,15 @@ impl Job<'_> {
         } else {
             None
         };
+        let rot_error = (rot_dof > 0.0).then(|| {
+            let (dof_t, dof) = (s.dof_translational(), s.dof_translational() + rot_dof);
+            let t_rot: Vec<f64> = bridge
+                .rows
+                .iter()
+                .map(|r| (r.temperature * dof - r.temperature_translational * dof_t) / rot_dof)
+                .collect();
+            u.temperature_out(crate::analysis::block::block_average(&t_rot).error)
+        });
         let mut observers = bridge.observers;
         let mut summary = SmdSummary {
             engine: "smd".to_owned(),
@@ -727,7 +744,10 @@ impl Job<'_> {
             temperature_error: u.temperature_out(blocked(|r| r.temperature)),
             temperature_start: u.temperature_out(kt_start),
             translational_temperature: u.temperature_out(sm.temperature_translational.mean),
+            translational_temperature_error: u
+                .temperature_out(blocked(|r| r.temperature_translational)),
             rotational_temperature: mean_t_rot.map(|t| u.temperature_out(t)),
+            rotational_temperature_error: rot_error,
             pressure: u.pressure_out(sm.pressure.mean),
             pressure_error,
             pressure_smooth: u.pressure_out(sm.pressure.mean),
@@ -767,6 +787,16 @@ impl Job<'_> {
                 .as_ref()
                 .filter(|c| c.wants_vacf())
                 .and_then(Correlations::diffusion_from_vacf),
+            diffusion_msd_error: observers
+                .correlations
+                .as_ref()
+                .filter(|c| c.wants_msd())
+                .and_then(Correlations::diffusion_from_msd_error),
+            diffusion_vacf_error: observers
+                .correlations
+                .as_ref()
+                .filter(|c| c.wants_vacf())
+                .and_then(Correlations::diffusion_from_vacf_error),
             seed: scene.seed,
             ignored_keys: self.ignored,
             notes: self.notes,

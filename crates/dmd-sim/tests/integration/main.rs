@@ -4,6 +4,7 @@
 mod chains;
 mod checkpoint;
 mod cli_robust;
+mod errors;
 mod every_scene;
 mod flexible;
 mod flexible_scenes;

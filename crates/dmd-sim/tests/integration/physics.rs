@@ -294,9 +294,12 @@ fn outputs_are_written_with_headers() {
     .unwrap();
     let s = run_scene(&scene, Path::new("."), Some(&dir), &mut Quiet).unwrap();
     for (file, header) in [
-        ("rdf.csv", "r,g"),
-        ("msd.csv", "t,msd"),
-        ("vacf.csv", "t,vacf,vacf_normalised"),
+        ("rdf.csv", "r,g,g_error"),
+        ("msd.csv", "t,msd,msd_error"),
+        (
+            "vacf.csv",
+            "t,vacf,vacf_error,vacf_normalised,vacf_normalised_error",
+        ),
         (
             "series.csv",
             "t,kinetic,potential,total,temperature,pressure",

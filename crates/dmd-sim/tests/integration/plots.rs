@@ -256,7 +256,7 @@ fn a_mixture_writes_partial_rdfs_whose_weighted_sum_is_the_total() {
     );
     assert_eq!(s["n_bodies"].as_u64(), Some(256));
     let (header, rows) = read_csv(&dir.join("rdf.csv"));
-    assert_eq!(header, ["r", "g", "g_S_S", "g_S_L", "g_L_L"]);
+    assert_eq!(header, ["r", "g", "g_error", "g_S_S", "g_S_L", "g_L_L"]);
     let n = ns + nl;
     let w = [
         ns * (ns - 1.0) / (n * (n - 1.0)),
@@ -265,7 +265,7 @@ fn a_mixture_writes_partial_rdfs_whose_weighted_sum_is_the_total() {
     ];
     let mut seen = 0;
     for row in &rows {
-        let sum: f64 = w.iter().zip(&row[2..]).map(|(w, g)| w * g).sum();
+        let sum: f64 = w.iter().zip(&row[3..]).map(|(w, g)| w * g).sum();
         assert!(
             (sum - row[1]).abs() <= 1e-12 * row[1].max(1.0),
             "{row:?}: {sum}"
@@ -279,7 +279,7 @@ fn a_mixture_writes_partial_rdfs_whose_weighted_sum_is_the_total() {
         let width = rows[1][0] - rows[0][0];
         for (k, core) in [1.0, 1.3, 1.6].into_iter().enumerate() {
             if r + 0.5 * width < core {
-                assert_eq!(row[2 + k], 0.0, "{} at r = {r}", header[2 + k]);
+                assert_eq!(row[3 + k], 0.0, "{} at r = {r}", header[3 + k]);
             }
         }
     }

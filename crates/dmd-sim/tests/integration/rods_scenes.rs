@@ -95,7 +95,7 @@ fn the_shipped_paper_scene_runs_in_molecular_units() {
         .skip(1)
         .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
         .collect();
-    assert!((rows[0][1] - 1.0).abs() < 1e-12 && (rows[0][2] - 1.0).abs() < 1e-12);
+    assert!((rows[0][1] - 1.0).abs() < 1e-12 && (rows[0][3] - 1.0).abs() < 1e-12);
     assert!(rows.last().unwrap()[1] < 0.9, "{:?}", rows.last());
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -115,8 +115,14 @@ fn a_rods_scene_with_smd_writes_the_event_driven_files_and_holds_its_temperature
         header(&dir.join("series.csv")),
         "t,kinetic,potential,total,temperature,pressure"
     );
-    assert_eq!(header(&dir.join("oacf.csv")), "t,s0_dot_st,p2");
-    assert_eq!(header(&dir.join("vacf.csv")), "t,vacf,vacf_normalised");
+    assert_eq!(
+        header(&dir.join("oacf.csv")),
+        "t,s0_dot_st,s0_dot_st_error,p2,p2_error"
+    );
+    assert_eq!(
+        header(&dir.join("vacf.csv")),
+        "t,vacf,vacf_error,vacf_normalised,vacf_normalised_error"
+    );
     // 0.3 ps of 1.8 fs steps (rounded to 167); the trajectory every 0.1 ps = 56 steps from
     // t = 0: frames at steps 0, 56 and 112, with the rods' orientation columns.
     assert_eq!((s.steps, s.equilibration_steps), (167, 333));
@@ -137,6 +143,15 @@ fn a_rods_scene_with_smd_writes_the_event_driven_files_and_holds_its_temperature
     );
     let rot = s.rotational_temperature.expect("rods rotate");
     assert!((rot - 505.144).abs() < 0.15 * 505.144, "T_rot = {rot} K");
+    // Every average carries its error, as the event-driven engine's does.
+    for (what, e) in [
+        ("T_trans", Some(s.translational_temperature_error)),
+        ("T_rot", s.rotational_temperature_error),
+        ("D (MSD)", s.diffusion_msd_error),
+        ("D (VACF)", s.diffusion_vacf_error),
+    ] {
+        assert!(e.is_some_and(|e| e.is_finite() && e > 0.0), "{what}: {e:?}");
+    }
     // A liquid: the potential energy per rod is negative, a few ε (ε = 3 kJ/mol).
     assert!(
         s.potential_energy_per_body < -3.0 && s.potential_energy_per_body > -20.0,
