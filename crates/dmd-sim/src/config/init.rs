@@ -9,6 +9,7 @@ use rand_xoshiro::Xoshiro256PlusPlus;
 
 use crate::analysis::output::ASE_VELOCITY_IN_A_PER_PS;
 use crate::config::scene::{Positions, PotentialSpec, Scene, SceneError, UnitSystem};
+use crate::engine::simulation::MAX_IMAGE;
 
 /// Positions, species and box of the initial configuration.
 #[derive(Clone, Debug, PartialEq)]
@@ -429,9 +430,6 @@ pub struct FileMotion {
     pub images: Option<Vec<[i32; 3]>>,
 }
 
-/// Largest image counter a start file may give (a body ~10⁹ boxes from where it started).
-const MAX_IMAGE: f64 = 1e9;
-
 /// Reads the velocities (and with `rotating` the lab angular velocities) of the `n` bodies of
 /// the frame `init.frame` of `init.file`, in the units `dmd` writes them; the masses of the
 /// `masses:R:1` column, when the file has one, must be the scene's (`masses`, per body).
@@ -488,10 +486,13 @@ pub fn read_motion(
                 .map_err(|line| err(format!("line {line}: expected three image counters")))?;
             let mut images = Vec::with_capacity(rows.len());
             for (v, (line, _)) in rows.iter().zip(&frame.rows) {
-                if v.iter().any(|x| x.fract() != 0.0 || x.abs() > MAX_IMAGE) {
+                if v.iter()
+                    .any(|x| x.fract() != 0.0 || x.abs() > f64::from(MAX_IMAGE))
+                {
                     return Err(err(format!(
-                        "line {line}: map_shift must be three whole numbers of at most {MAX_IMAGE:e} \
-                         in size"
+                        "line {line}: map_shift must be three whole numbers of at most {:e} in \
+                         size",
+                        f64::from(MAX_IMAGE)
                     )));
                 }
                 images.push([v[0] as i32, v[1] as i32, v[2] as i32]);

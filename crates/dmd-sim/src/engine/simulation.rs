@@ -54,6 +54,10 @@ pub use state::{BodyRecord, SimState, StateError, TrueEnergy};
 /// re-basing, so no generation can wrap round while an event predicted with it waits.
 pub const MAX_REBASE_EVENTS: u64 = 1 << 31;
 
+/// Largest box crossings of a body each way that a state may hold (image counters are `i32`;
+/// no run crosses a box 10⁹ times): start files and checkpoints beyond it are refused.
+pub const MAX_IMAGE: u32 = 1_000_000_000;
+
 /// Why a simulation could not go on.
 #[derive(Debug, thiserror::Error)]
 pub enum SimError {

@@ -615,6 +615,11 @@ fn forged_checkpoints_with_valid_crcs_are_refused_as_states() {
             "body 5 has its list centre",
         ),
         (
+            "image-counter-at-its-limit",
+            edit(&|b| b.sim.images[4][2] = i32::MIN),
+            "-2147483648] times, more than any run (at most 1000000000 each way)",
+        ),
+        (
             "body-off-its-centre",
             edit(&|b| b.sim.bodies[7].r.z += 0.9),
             "from its list centre, beyond the skin",

@@ -632,6 +632,17 @@ fn check_fits<M: PairModel>(
             return bad(format!("it has {len} {name} for {n} bodies"));
         }
     }
+    if let Some((i, im)) = s
+        .images
+        .iter()
+        .enumerate()
+        .find(|(_, im)| im.iter().any(|k| k.unsigned_abs() > super::MAX_IMAGE))
+    {
+        return bad(format!(
+            "body {i} has crossed the box {im:?} times, more than any run (at most {} each way)",
+            super::MAX_IMAGE
+        ));
+    }
     if s.cell_len.len() != cells.n_cells() {
         return bad(format!(
             "it has {} cells, the box {}",
