@@ -526,38 +526,22 @@ fn print_summary(s: &Summary, out: &Path, terminal: Option<&Terminal>) {
             u.time
         ),
     );
-    let mut temperature = vec![format!(
-        "{} {} (production started at {} {})",
-        pm(s.temperature, s.temperature_error, 5),
-        u.temperature,
-        sig(s.temperature_start, 5),
-        u.temperature
-    )];
-    if let Some(rot) = s.rotational_temperature {
-        temperature.push(format!(
-            "translational {} {}",
-            pm(
+    print_thermodynamics(
+        &Thermo {
+            temperature: (s.temperature, s.temperature_error),
+            start: s.temperature_start,
+            translational: (
                 s.translational_temperature,
                 s.translational_temperature_error,
-                5
             ),
-            u.temperature
-        ));
-        temperature.push(format!(
-            "rotational {} {}",
-            pm(rot, s.rotational_temperature_error, 5),
-            u.temperature
-        ));
-    }
-    list("temperature", &temperature);
-    line(
-        "pressure",
-        &format!(
-            "{} {}, Z = PV/NkT = {}",
-            pm(s.pressure, s.pressure_error, 5),
-            u.pressure,
-            sig(s.compressibility, 4)
-        ),
+            rotational: s
+                .rotational_temperature
+                .map(|t| (t, s.rotational_temperature_error)),
+            pressure: (s.pressure, s.pressure_error),
+            compressibility: s.compressibility,
+            of: "",
+        },
+        u,
     );
     line(
         "U/N",
@@ -660,6 +644,54 @@ fn print_summary(s: &Summary, out: &Path, terminal: Option<&Terminal>) {
     print_wrote(out, &s.files);
 }
 
+/// The temperatures and pressure both engines report, each with its block-average error.
+struct Thermo {
+    temperature: (f64, Option<f64>),
+    /// The temperature at the start of production.
+    start: f64,
+    translational: (f64, Option<f64>),
+    /// Of bodies that rotate.
+    rotational: Option<(f64, Option<f64>)>,
+    pressure: (f64, Option<f64>),
+    compressibility: f64,
+    /// What the pressure is of, after its line (`" (the smooth model)"` for standard MD).
+    of: &'static str,
+}
+
+/// The `temperature` and `pressure` lines of a summary.
+fn print_thermodynamics(t: &Thermo, u: &UnitNames) {
+    let mut temperature = vec![format!(
+        "{} {} (production started at {} {})",
+        pm(t.temperature.0, t.temperature.1, 5),
+        u.temperature,
+        sig(t.start, 5),
+        u.temperature
+    )];
+    if let Some((rot, rot_error)) = t.rotational {
+        temperature.push(format!(
+            "translational {} {}",
+            pm(t.translational.0, t.translational.1, 5),
+            u.temperature
+        ));
+        temperature.push(format!(
+            "rotational {} {}",
+            pm(rot, rot_error, 5),
+            u.temperature
+        ));
+    }
+    list("temperature", &temperature);
+    line(
+        "pressure",
+        &format!(
+            "{} {}, Z = PV/NkT = {}{}",
+            pm(t.pressure.0, t.pressure.1, 5),
+            u.pressure,
+            sig(t.compressibility, 4),
+            t.of
+        ),
+    );
+}
+
 /// The diffusion coefficients a run measured.
 fn print_diffusion(
     msd: (Option<f64>, Option<f64>),
@@ -725,38 +757,22 @@ fn print_smd_summary(s: &SmdSummary, out: &Path, terminal: Option<&Terminal>) {
             ),
         ],
     );
-    let mut temperature = vec![format!(
-        "{} {} (production started at {} {})",
-        pm(s.temperature, Some(s.temperature_error), 5),
-        u.temperature,
-        sig(s.temperature_start, 5),
-        u.temperature
-    )];
-    if let Some(rot) = s.rotational_temperature {
-        temperature.push(format!(
-            "translational {} {}",
-            pm(
+    print_thermodynamics(
+        &Thermo {
+            temperature: (s.temperature, Some(s.temperature_error)),
+            start: s.temperature_start,
+            translational: (
                 s.translational_temperature,
                 Some(s.translational_temperature_error),
-                5
             ),
-            u.temperature
-        ));
-        temperature.push(format!(
-            "rotational {} {}",
-            pm(rot, s.rotational_temperature_error, 5),
-            u.temperature
-        ));
-    }
-    list("temperature", &temperature);
-    line(
-        "pressure",
-        &format!(
-            "{} {}, Z = PV/NkT = {} (the smooth model)",
-            pm(s.pressure, Some(s.pressure_error), 5),
-            u.pressure,
-            sig(s.compressibility, 4)
-        ),
+            rotational: s
+                .rotational_temperature
+                .map(|t| (t, s.rotational_temperature_error)),
+            pressure: (s.pressure, Some(s.pressure_error)),
+            compressibility: s.compressibility,
+            of: " (the smooth model)",
+        },
+        u,
     );
     line(
         "U/N",
