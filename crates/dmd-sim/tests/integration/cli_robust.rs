@@ -267,7 +267,9 @@ fn run_and_signal(scene: &Path, out: &Path, signals: usize) -> (Output, std::tim
 fn a_signal_stops_the_run_with_a_checkpoint_that_resumes_bit_for_bit() {
     let d = dir("signal");
     let s = d.join("scene.toml");
-    let text = LONG.replace("events = 4e6\n", "events = 4e6\nrebase_events = 1e5\n");
+    // 1.5·10⁶ events: seconds of a run, of which the signal, 0.2 s into production, stops the
+    // first part at a re-basing.
+    let text = LONG.replace("events = 4e6\n", "events = 1.5e6\nrebase_events = 1e5\n");
     std::fs::write(&s, &text).unwrap();
     let stopped = d.join("stopped");
     let (o, _) = run_and_signal(&s, &stopped, 1);
