@@ -283,6 +283,20 @@ pub struct Correlations {
     d_vacf_blocks: Blocks,
 }
 
+/// The diffusion coefficients of a run ([`Correlations::diffusions`]), each with its
+/// block-average error (length²/time).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Diffusions {
+    /// From the slope of the MSD.
+    pub msd: Option<f64>,
+    /// The error of `msd`.
+    pub msd_error: Option<f64>,
+    /// From the Green–Kubo integral of the VACF.
+    pub vacf: Option<f64>,
+    /// The error of `vacf`.
+    pub vacf_error: Option<f64>,
+}
+
 impl Correlations {
     /// Lags `0, dt, …` up to `max_lag`; a new time origin every `max_lag / 10` (at least every
     /// sample).
@@ -507,6 +521,19 @@ impl Correlations {
     /// Whether the VACF was asked for.
     pub fn wants_vacf(&self) -> bool {
         self.want_vacf
+    }
+
+    /// The diffusion coefficients a run reports and their errors: those of the correlations
+    /// asked for, none without correlations.
+    pub fn diffusions(correlations: Option<&Self>) -> Diffusions {
+        let msd = correlations.filter(|c| c.wants_msd());
+        let vacf = correlations.filter(|c| c.wants_vacf());
+        Diffusions {
+            msd: msd.and_then(Self::diffusion_from_msd),
+            msd_error: msd.and_then(Self::diffusion_from_msd_error),
+            vacf: vacf.and_then(Self::diffusion_from_vacf),
+            vacf_error: vacf.and_then(Self::diffusion_from_vacf_error),
+        }
     }
 
     /// Self-diffusion coefficient from the slope of the MSD over the second half of the lags

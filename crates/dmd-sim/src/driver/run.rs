@@ -1308,6 +1308,7 @@ impl Context<'_> {
             .samples
             .as_ref()
             .map(|s| s.summary(n as usize, dof, sim.model().rotational_dof()));
+        let diffusion = Correlations::diffusions(observers.correlations.as_ref());
         let mut summary = Summary {
             engine: "dmd".to_owned(),
             events: counters.events,
@@ -1399,26 +1400,10 @@ impl Context<'_> {
             queue_stale_dropped: qs.stale_dropped,
             queue_stale_swept: qs.stale_swept,
             requeued: qs.requeued,
-            diffusion_msd: observers
-                .correlations
-                .as_ref()
-                .filter(|c| c.wants_msd())
-                .and_then(Correlations::diffusion_from_msd),
-            diffusion_vacf: observers
-                .correlations
-                .as_ref()
-                .filter(|c| c.wants_vacf())
-                .and_then(Correlations::diffusion_from_vacf),
-            diffusion_msd_error: observers
-                .correlations
-                .as_ref()
-                .filter(|c| c.wants_msd())
-                .and_then(Correlations::diffusion_from_msd_error),
-            diffusion_vacf_error: observers
-                .correlations
-                .as_ref()
-                .filter(|c| c.wants_vacf())
-                .and_then(Correlations::diffusion_from_vacf_error),
+            diffusion_msd: diffusion.msd,
+            diffusion_vacf: diffusion.vacf,
+            diffusion_msd_error: diffusion.msd_error,
+            diffusion_vacf_error: diffusion.vacf_error,
             seed: scene.seed,
             files: Vec::new(),
             hmc: run

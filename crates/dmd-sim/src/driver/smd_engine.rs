@@ -727,6 +727,7 @@ impl Job<'_> {
             u.temperature_out(crate::analysis::block::block_average(&t_rot).error)
         });
         let mut observers = bridge.observers;
+        let diffusion = Correlations::diffusions(observers.correlations.as_ref());
         let mut summary = SmdSummary {
             engine: "smd".to_owned(),
             model: model.to_owned(),
@@ -777,26 +778,10 @@ impl Job<'_> {
             steps_per_build: stats.steps_per_build(),
             skin: self.settings.skin,
             smoothing: [self.window.0, self.window.1],
-            diffusion_msd: observers
-                .correlations
-                .as_ref()
-                .filter(|c| c.wants_msd())
-                .and_then(Correlations::diffusion_from_msd),
-            diffusion_vacf: observers
-                .correlations
-                .as_ref()
-                .filter(|c| c.wants_vacf())
-                .and_then(Correlations::diffusion_from_vacf),
-            diffusion_msd_error: observers
-                .correlations
-                .as_ref()
-                .filter(|c| c.wants_msd())
-                .and_then(Correlations::diffusion_from_msd_error),
-            diffusion_vacf_error: observers
-                .correlations
-                .as_ref()
-                .filter(|c| c.wants_vacf())
-                .and_then(Correlations::diffusion_from_vacf_error),
+            diffusion_msd: diffusion.msd,
+            diffusion_vacf: diffusion.vacf,
+            diffusion_msd_error: diffusion.msd_error,
+            diffusion_vacf_error: diffusion.vacf_error,
             seed: scene.seed,
             ignored_keys: self.ignored,
             notes: self.notes,

@@ -6,41 +6,21 @@ use std::path::Path;
 use dmd_sim::run::{Quiet, run_scene};
 use dmd_sim::scene::Scene;
 
-use crate::support::scratch;
+use crate::support::{REDUCED_RODS, scratch};
 
-/// The paper's rods in reduced units (as `rods_scenes`), NVE production long enough for more
-/// than 16 time origins of the correlations.
-const RODS: &str = r#"
-version = 1
-seed = 5
-[box]
-density = 0.5
-[[species]]
-name = "rod"
-count = 125
-mass = 1.0
-inertia = 0.00696
-[[pair]]
-species = ["rod", "rod"]
-potential = { kind = "rods", epsilon = 1.0, sigma = 1.0, zeta = 0.3295 }
-terraces = { step_kt = 0.5 }
-[init]
-positions = "sc"
-temperature = 1.4
-[thermostat]
-kind = "andersen"
-rate = 2.0
-[run]
-equilibration_time = 0.3
-time = 0.6
-[output]
-sample_interval = 0.01
-rdf = { bins = 20, r_max = 2.0, every = 1 }
-msd = { max_lag = 0.05 }
-vacf = { max_lag = 0.05 }
-orientation_acf = { max_lag = 0.05 }
-plots = false
-"#;
+/// The rods of `support` with seed 5, 0.3 τ of thermostatted equilibration and 0.6 τ of NVE
+/// production: more than 16 time origins of the correlations.
+const OVERRIDES: [&str; 9] = [
+    "seed=5",
+    "run.equilibration_time=0.3",
+    "run.time=0.6",
+    "output.sample_interval=0.01",
+    "output.rdf={ bins = 20, r_max = 2.0, every = 1 }",
+    "output.msd={ max_lag = 0.05 }",
+    "output.vacf={ max_lag = 0.05 }",
+    "output.orientation_acf={ max_lag = 0.05 }",
+    "output.plots=false",
+];
 
 /// A CSV file's header and rows.
 fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
@@ -61,7 +41,7 @@ fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
 #[test]
 fn every_average_has_a_finite_positive_error_and_every_table_an_error_column() {
     let dir = scratch("errors");
-    let scene = Scene::from_str_with(RODS, &[]).unwrap();
+    let scene = Scene::from_str_with(REDUCED_RODS, &OVERRIDES.map(String::from)).unwrap();
     let s = run_scene(&scene, Path::new("."), Some(&dir), &mut Quiet).unwrap();
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();

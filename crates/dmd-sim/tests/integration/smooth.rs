@@ -2,8 +2,8 @@
 //! energy and pressure at every sample), and production starting at the bath temperature.
 
 use std::path::Path;
+use std::sync::LazyLock;
 
-use dmd_sim::run::{Quiet, Summary, run_scene};
 use dmd_sim::scene::Scene;
 use dmd_sim::search::SearchSettings;
 use dmd_sim::simulation::{LoopSettings, Sampler, Simulation, Stop, View};
@@ -13,46 +13,17 @@ use event_queue::{BoundedQueue, LazyQueue, Ticket};
 use glam::DVec3;
 use potential::{LjRod, PairGeometry, PairPotential, Smoothed, TerraceMap, TerraceOptions};
 
+use crate::support::{REDUCED_RODS, run_with as run};
+
 type Queue = LazyQueue<BoundedQueue<Ticket>>;
 
-/// Reduced units: the paper's rods (ζ/σ = 1/3.035, I/(mσ²) = 1.154/(18 · 3.035²)), 125 of
-/// them at ρσ³ = 0.5, T* = 1.4, short runs.
-const RODS: &str = r#"
-version = 1
-seed = 3
-[box]
-density = 0.5
-[[species]]
-name = "rod"
-count = 125
-mass = 1.0
-inertia = 0.00696
-[[pair]]
-species = ["rod", "rod"]
-potential = { kind = "rods", epsilon = 1.0, sigma = 1.0, zeta = 0.3295 }
-terraces = { step_kt = 0.5 }
-[init]
-positions = "sc"
-temperature = 1.4
-[thermostat]
-kind = "andersen"
-rate = 2.0
-[run]
-equilibration_time = 0.5
-time = 0.5
-[output]
-sample_interval = 0.01
-"#;
-
-fn run(text: &str, overrides: &[&str]) -> Summary {
-    let o: Vec<String> = overrides.iter().map(|s| (*s).to_owned()).collect();
-    let scene = Scene::from_str_with(text, &o).unwrap_or_else(|e| panic!("{e}"));
-    run_scene(&scene, Path::new("."), None, &mut Quiet).unwrap_or_else(|e| panic!("{e}"))
-}
+/// The rods of `support`, sampled every 0.01 τ.
+static RODS: LazyLock<String> =
+    LazyLock::new(|| format!("{REDUCED_RODS}[output]\nsample_interval = 0.01\n"));
 
 #[test]
 fn production_starts_at_the_bath_temperature() {
-    let s = run(RODS, &[]);
+    let s = run(&RODS, &[]);
     let t = 1.4;
     assert!(
         (s.temperature_start - t).abs() <= 1e-10 * t,
@@ -75,7 +46,7 @@ fn production_starts_at_the_bath_temperature() {
 
     // Without the rescaling, production starts wherever the stochastic thermostat left it
     // (125 rods: a few per cent off), and still conserves energy.
-    let off = run(RODS, &["thermostat.rescale_at_end=false"]);
+    let off = run(&RODS, &["thermostat.rescale_at_end=false"]);
     assert!(
         (off.temperature_start - t).abs() > 1e-6 * t,
         "{}",
@@ -89,7 +60,7 @@ fn production_starts_at_the_bath_temperature() {
 #[test]
 fn the_smooth_estimators_are_reported_beside_the_terraced_values() {
     // At every sample: this short run has too few samples at the default stride for errors.
-    let s = run(RODS, &["output.smooth_every=1"]);
+    let s = run(&RODS, &["output.smooth_every=1"]);
     let u = s.potential_energy_per_body_smooth.expect("on by default");
     let p = s.pressure_smooth.expect("on by default");
     let (ue, pe) = (
@@ -105,7 +76,7 @@ fn the_smooth_estimators_are_reported_beside_the_terraced_values() {
     assert!(s.pressure_error.unwrap() > 0.0);
     assert!(s.potential_energy_per_body_error.unwrap() > 0.0);
     // Switched off: the same trajectory, no smooth keys.
-    let off = run(RODS, &["output.smooth_estimators=false"]);
+    let off = run(&RODS, &["output.smooth_estimators=false"]);
     assert_eq!(off.potential_energy_per_body_smooth, None);
     assert_eq!(off.pressure_smooth, None);
     assert_eq!(off.events, s.events);
@@ -123,7 +94,7 @@ fn the_smd_engine_reports_its_own_values_under_the_smooth_names() {
         .iter()
         .map(|s| (*s).to_owned())
         .collect();
-    let scene = Scene::from_str_with(RODS, &o).unwrap();
+    let scene = Scene::from_str_with(&RODS, &o).unwrap();
     let s = dmd_sim::smd_engine::run(&scene, Path::new("."), None).unwrap();
     assert_eq!(
         s.potential_energy_per_body_smooth,
@@ -148,12 +119,12 @@ fn the_smd_engine_reports_its_own_values_under_the_smooth_names() {
 /// tail beyond the outermost level and the energy within each terrace).
 #[test]
 fn at_a_quarter_kt_the_smooth_estimate_is_closer_to_standard_md_than_the_terraces() {
-    let dmd = run(RODS, &["pair.0.terraces.step_kt=0.25", "run.time=1"]);
+    let dmd = run(&RODS, &["pair.0.terraces.step_kt=0.25", "run.time=1"]);
     let o: Vec<String> = ["engine=\"smd\"", "run.time=1"]
         .iter()
         .map(|s| (*s).to_owned())
         .collect();
-    let scene = Scene::from_str_with(RODS, &o).unwrap();
+    let scene = Scene::from_str_with(&RODS, &o).unwrap();
     let smd = dmd_sim::smd_engine::run(&scene, Path::new("."), None).unwrap();
     let reference = smd.potential_energy_per_body;
     let smooth = dmd.potential_energy_per_body_smooth.unwrap();

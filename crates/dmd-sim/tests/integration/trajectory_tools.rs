@@ -55,20 +55,27 @@ fn rods(extra: &[&str]) -> Scene {
     shipped("rods-paper.toml", &o)
 }
 
-/// Whether `import ase, gsd.hoomd, numpy` works; without it, fails under CI and skips
+/// Whether `python3 -c "import {modules}"` works; without it, fails under CI and skips
 /// otherwise.
-fn ase_ready(test: &str) -> bool {
+fn python_ready(test: &str, modules: &str) -> bool {
     let ok = Command::new("python3")
-        .args(["-c", "import ase.io, gsd.hoomd, numpy"])
+        .args(["-c", &format!("import {modules}")])
         .output()
         .is_ok_and(|o| o.status.success());
     if !ok {
-        let why = "python3 cannot `import ase.io, gsd.hoomd, numpy` (install them with \
-                   `python3 -m pip install ase gsd numpy`)";
+        let why = format!(
+            "python3 cannot `import {modules}` (install them with `python3 -m pip install ase \
+             ovito gsd numpy`)"
+        );
         assert!(std::env::var_os("CI").is_none(), "{test}: {why}");
         eprintln!("SKIPPED {test}: {why}");
     }
     ok
+}
+
+/// Whether ASE, gsd and numpy import ([`python_ready`]).
+fn ase_ready(test: &str) -> bool {
+    python_ready(test, "ase.io, gsd.hoomd, numpy")
 }
 
 /// Runs a Python script with arguments; its standard output.
@@ -202,15 +209,7 @@ print(pipeline.source.num_frames)
 #[test]
 fn ovito_reads_a_rods_trajectory_as_the_gsd_file_has_it() {
     let test = "ovito_reads_a_rods_trajectory_as_the_gsd_file_has_it";
-    let ready = Command::new("python3")
-        .args(["-c", "import ovito.io, gsd.hoomd, numpy"])
-        .output()
-        .is_ok_and(|o| o.status.success());
-    if !ready {
-        let why = "python3 cannot `import ovito.io, gsd.hoomd, numpy` (install them with \
-                   `python3 -m pip install ovito gsd numpy`)";
-        assert!(std::env::var_os("CI").is_none(), "{test}: {why}");
-        eprintln!("SKIPPED {test}: {why}");
+    if !python_ready(test, "ovito.io, gsd.hoomd, numpy") {
         return;
     }
     let d = dir("ovito-rods");
