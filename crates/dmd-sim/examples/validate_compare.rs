@@ -26,8 +26,8 @@ use smd::{BodyModel, Integrator, Lattice, Settings, Setup, System, units};
 
 mod common;
 use common::{
-    Args, PAPER, Report, csv, gas_overrides, integrated_difference, kt_label, matched_ratio,
-    plot_points, scene_run,
+    Args, PAPER, Report, csv, csv_pairs, gas_overrides, integrated_difference, kt_label,
+    matched_ratio, plot_points, scene_run,
 };
 /// Sampling interval of every correlation function, DMD and SMD alike (a multiple of every
 /// SMD step), so that the curves share their abscissae.
@@ -153,14 +153,14 @@ fn dmd_production(
         ));
     }
     let g = csv(&dir.join("rdf.csv"));
-    let v = csv(&dir.join("vacf.csv"));
+    let v = csv_pairs(&dir.join("vacf.csv"), "t", "vacf_normalised");
     let o = csv(&dir.join("oacf.csv"));
     Ok(Production {
         engine: Engine::Dmd(dv),
         seed,
         curves: Curves {
             rdf: g.iter().map(|x| (x[0], x[1])).collect(),
-            vacf: v.iter().map(|x| (x[0], x[2])).collect(),
+            vacf: v,
             oacf: o.iter().map(|x| (x[0], x[1])).collect(),
         },
         potential: sum.potential_energy_per_body,

@@ -12,6 +12,8 @@
 //! re-searching every interval on a fine grid; the terrace step ΔV and the level-placement and
 //! step-energy rules against their cost.
 
+mod common;
+
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -23,6 +25,8 @@ use dmd_sim::search::SearchSettings;
 use dmd_sim::simulation::{LoopSettings, NoSampler, Simulation, Stop};
 use dmd_sim::terraced::{PairTerraces, RodSpecies, Terraced};
 use event_queue::{BoundedQueue, LazyQueue, Ticket};
+
+use common::{csv, csv_pairs};
 use glam::DVec3;
 use potential::{LjRod, TerraceMap, TerraceOptions};
 
@@ -93,19 +97,6 @@ fn quiet_paper(extra: &[String]) -> Vec<String> {
     let mut o: Vec<String> = NO_OUTPUT.iter().map(|s| (*s).to_owned()).collect();
     o.extend_from_slice(extra);
     o
-}
-
-fn csv(path: &Path) -> Vec<Vec<f64>> {
-    std::fs::read_to_string(path)
-        .unwrap_or_default()
-        .lines()
-        .skip(1)
-        .map(|l| {
-            l.split(',')
-                .map(|x| x.parse().unwrap_or(f64::NAN))
-                .collect()
-        })
-        .collect()
 }
 
 fn pair_events(s: &Summary) -> f64 {
@@ -711,10 +702,10 @@ fn observables(args: &Args, r: &mut Report, w: &mut String, work: &Path) -> Resu
             Some(&dir),
         )?;
         let g = csv(&dir.join("rdf.csv"));
-        let v = csv(&dir.join("vacf.csv"));
+        let v = csv_pairs(&dir.join("vacf.csv"), "t", "vacf_normalised");
         let o = csv(&dir.join("oacf.csv"));
         rdf.push(g.iter().map(|x| (x[0], x[1])).collect::<Vec<_>>());
-        vacf.push(v.iter().map(|x| (x[0], x[2])).collect::<Vec<_>>());
+        vacf.push(v);
         oacf.push(o.iter().map(|x| (x[0], x[1])).collect::<Vec<_>>());
         summaries.push(sum);
     }

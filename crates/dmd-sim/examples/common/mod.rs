@@ -1,4 +1,4 @@
-//! What the DMD-against-SMD validations share (`validate_compare`, `validate_frontier`): the
+//! What the rods validations share (`validate_compare`, `validate_frontier`, `validate_rods`): the
 //! paper's scene and its gas, scene runs, CSV reading, the integrated difference of two curves,
 //! cost at matched error, and log–log plots of error against cost.
 //!
@@ -107,6 +107,29 @@ pub(crate) fn csv(path: &Path) -> Vec<Vec<f64>> {
             l.split(',')
                 .map(|x| x.parse().unwrap_or(f64::NAN))
                 .collect()
+        })
+        .collect()
+}
+
+/// Rows `(x, y)` of the columns named `x` and `y` of a CSV file with a header (empty if the
+/// file or a column is missing): columns by name, as `dmd` documents them, not by position.
+pub(crate) fn csv_pairs(path: &Path, x: &str, y: &str) -> Vec<(f64, f64)> {
+    let text = std::fs::read_to_string(path).unwrap_or_default();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap_or("").split(',').collect();
+    let (Some(i), Some(j)) = (
+        header.iter().position(|h| *h == x),
+        header.iter().position(|h| *h == y),
+    ) else {
+        return Vec::new();
+    };
+    lines
+        .map(|l| {
+            let row: Vec<f64> = l
+                .split(',')
+                .map(|v| v.parse().unwrap_or(f64::NAN))
+                .collect();
+            (row[i], row[j])
         })
         .collect()
 }
