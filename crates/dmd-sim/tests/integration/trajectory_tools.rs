@@ -33,6 +33,17 @@ fn shipped(name: &str, overrides: &[String]) -> Scene {
     Scene::from_str_with(&text, overrides).unwrap_or_else(|e| panic!("{name}: {e}"))
 }
 
+/// Runs the shipped scene `name` with `overrides`, writing into `out`.
+fn run_into(name: &str, overrides: &[String], out: &Path) -> Summary {
+    run_scene(
+        &shipped(name, overrides),
+        Path::new("."),
+        Some(out),
+        &mut Quiet,
+    )
+    .unwrap()
+}
+
 fn strings(xs: &[&str]) -> Vec<String> {
     xs.iter().map(|s| (*s).to_owned()).collect()
 }
@@ -492,26 +503,14 @@ fn a_run_of_spheres_continues_from_its_last_frame() {
         "output.trajectory={ interval = 0.4 }",
     ]);
     let first = d.join("first");
-    let s: Summary = run_scene(
-        &shipped("mixture.toml", &o),
-        Path::new("."),
-        Some(&first),
-        &mut Quiet,
-    )
-    .unwrap();
+    let s: Summary = run_into("mixture.toml", &o, &first);
     let xyz = first.join("trajectory.xyz");
     let k = frame_kinetic(&xyz, None);
     let mut o2 = o.clone();
     o2.extend(from_last_frame(&xyz, DVec3::from(s.box_lengths)));
     o2.push("box.aspect=".to_owned());
     let second = d.join("second");
-    run_scene(
-        &shipped("mixture.toml", &o2),
-        Path::new("."),
-        Some(&second),
-        &mut Quiet,
-    )
-    .unwrap();
+    run_into("mixture.toml", &o2, &second);
     close(first_kinetic(&second), k, "kinetic energy at t = 0");
     // Drawn velocities at init.temperature would give (3N − 3)/2 kT.
     assert!((k - 0.5 * (3.0 * 256.0 - 3.0)).abs() > 1e-3 * k, "{k}");
@@ -580,13 +579,7 @@ fn a_run_of_water_continues_from_its_last_frame() {
         "output.trajectory={ interval = 0.002 }",
     ]);
     let first = d.join("first");
-    let s = run_scene(
-        &shipped("water-ssd.toml", &o),
-        Path::new("."),
-        Some(&first),
-        &mut Quiet,
-    )
-    .unwrap();
+    let s = run_into("water-ssd.toml", &o, &first);
     let xyz = first.join("trajectory.xyz");
     // The moments the model takes: water's published 1.7696 rounded to the planar 1.7695.
     let moments = DVec3::new(0.6145 + 1.1550, 0.6145, 1.1550);
@@ -594,13 +587,7 @@ fn a_run_of_water_continues_from_its_last_frame() {
     let mut o2 = o.clone();
     o2.extend(from_last_frame(&xyz, DVec3::from(s.box_lengths)));
     let second = d.join("second");
-    run_scene(
-        &shipped("water-ssd.toml", &o2),
-        Path::new("."),
-        Some(&second),
-        &mut Quiet,
-    )
-    .unwrap();
+    run_into("water-ssd.toml", &o2, &second);
     close(first_kinetic(&second), k, "kinetic energy at t = 0");
     let _ = std::fs::remove_dir_all(&d);
 }
@@ -619,13 +606,7 @@ fn rows_go_to_the_bodies_their_ids_name() {
         "output.trajectory={ interval = 0.5 }",
     ]);
     let first = d.join("first");
-    let s = run_scene(
-        &shipped("mixture.toml", &o),
-        Path::new("."),
-        Some(&first),
-        &mut Quiet,
-    )
-    .unwrap();
+    let s = run_into("mixture.toml", &o, &first);
     // The last frame as written, and with its rows reversed.
     let (comment, rows) = last_frame(&first.join("trajectory.xyz"));
     let write = |name: &str, comment: &str, rows: &[Vec<String>]| {
@@ -653,13 +634,7 @@ fn rows_go_to_the_bodies_their_ids_name() {
         o2.push("box.aspect=".to_owned());
         let o2: Vec<String> = [o[..5].to_vec(), o2].concat();
         let out = d.join(file.file_stem().unwrap());
-        run_scene(
-            &shipped("mixture.toml", &o2),
-            Path::new("."),
-            Some(&out),
-            &mut Quiet,
-        )
-        .unwrap();
+        run_into("mixture.toml", &o2, &out);
         let (_, rows) = last_frame(&out.join("trajectory.xyz"));
         rows.into_iter()
             .map(|r| r[..4].join(" "))
