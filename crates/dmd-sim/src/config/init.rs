@@ -591,22 +591,11 @@ pub fn maxwell_boltzmann(masses: &[f64], temperature: f64, seed: u64) -> Vec<DVe
 // ----- What trajectories take from a scene -----------------------------------------------------
 
 /// The ellipsoid a rod is drawn as, from its self-pair potential: semi-axes `(a, a, c)`, `c`
-/// along the rod (length).
-///
-/// - The modified Lennard-Jones rods (`rods`, `U = 0` at `r + ζ(½ − c²) = σ`): width
-///   `σ − ζ/2`, where two parallel rods' potential vanishes, and length `σ + ζ/2`, where two
-///   perpendicular rods' does.
-/// - Gay–Berne: breadth `σ₀` and length `κ σ₀`.
+/// along the rod (length); `None` for a potential whose bodies are not rods.
 pub fn rod_semi_axes(potential: &PotentialSpec) -> Option<[f64; 3]> {
-    match *potential {
-        PotentialSpec::Rods { sigma, zeta, .. } => {
-            let a = 0.5 * (sigma - 0.5 * zeta);
-            Some([a, a, 0.5 * (sigma + 0.5 * zeta)])
-        }
-        PotentialSpec::GayBerne { sigma0, kappa, .. } => {
-            Some([0.5 * sigma0, 0.5 * sigma0, 0.5 * kappa * sigma0])
-        }
-        PotentialSpec::LennardJones { .. } | PotentialSpec::SsdE { .. } => None,
+    match potential.describe().drawing() {
+        crate::analysis::output::Drawing::Rod { semi_axes } => Some(semi_axes),
+        _ => None,
     }
 }
 

@@ -19,7 +19,7 @@ pub use crate::analysis::output::{
     GSD_FRAME_BYTES, GSD_PARTICLE_BYTES, LAG_BYTES, SERIES_ROW_BYTES, short, trajectory_line_bytes,
 };
 pub use crate::config::scene::{DEFAULT_MAX_BYTES, MAX_STEP_ENERGY};
-use crate::config::scene::{PotentialSpec, Scene, SceneError};
+use crate::config::scene::{Scene, SceneError};
 use crate::config::units::Units;
 
 /// `kT` must lie within this factor of the energy scale of the potential (either way): the
@@ -58,15 +58,10 @@ fn energy_scale(scene: &Scene) -> Option<f64> {
         .flat_map(|p| p.steps.iter())
         .chain(scene.site_pair.iter().flat_map(|p| p.steps.iter()))
         .map(|s| s[1].abs());
-    let depths = scene.pair.iter().filter_map(|p| match &p.potential {
-        Some(PotentialSpec::Rods { epsilon, .. } | PotentialSpec::LennardJones { epsilon, .. }) => {
-            Some(epsilon.abs())
-        }
-        Some(PotentialSpec::GayBerne { epsilon0, .. }) => Some(epsilon0.abs()),
-        // The Lennard-Jones well of SSD/E, the smallest of its energies (kJ/mol).
-        Some(PotentialSpec::SsdE { .. }) => Some(potential::SsdParameters::SSD_E.epsilon),
-        None => None,
-    });
+    let depths = scene
+        .pair
+        .iter()
+        .filter_map(|p| p.potential.map(|q| q.describe().well_depth().abs()));
     steps
         .chain(depths)
         .filter(|e| e.is_finite() && *e > 0.0)

@@ -4,8 +4,10 @@
 
 pub mod flexible_scene;
 pub mod init;
+pub mod kinds;
 pub mod limits;
 pub(crate) mod load;
+pub mod plan;
 pub mod rods;
 pub mod scene;
 pub mod site_scene;

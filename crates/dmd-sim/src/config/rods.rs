@@ -1,216 +1,37 @@
 //! From a scene to its interaction model: stepped tables for spheres, terraced potentials for
-//! rods (003 Eq. 7), and the search settings and initial rotation of the rods.
+//! rods and tops (003 Eq. 7), and the search settings and initial rotation of the bodies.
 //!
 //! Lennard-Jones spheres on terraces need no root search: their terraces are radial steps with
 //! analytic event times ([`terraced::radial_steps`](crate::models::terraced::radial_steps)), so they run on the
-//! stepped path. Only potentials that depend on orientations (the rods of 003 Eqs. 22–23 with
-//! `ζ > 0`, Gay–Berne) build a [`Terraced`](crate::models::terraced::Terraced) model; a
-//! potential that reads whole attitudes (SSD/E water) builds one on rigid tops
-//! ([`tops_model`]), with random attitudes and equipartitioned angular velocities.
+//! stepped path. Potentials that depend on orientations build a
+//! [`Terraced`](crate::models::terraced::Terraced) model through their
+//! [`Kind`](crate::config::kinds::Kind): uniaxial ones on rods ([`rods_model`]), ones that read
+//! whole attitudes (SSD/E water) on rigid tops ([`tops_model`]), with random orientations and
+//! equipartitioned angular velocities. This module holds what the kinds share: terrace maps,
+//! search settings, starting rotations and the smooth estimators.
+
+use std::path::Path;
 
 use glam::DVec3;
 use potential::{
-    GayBerne, Layout, LennardJones, LevelSet, LjRod, NearMinimum, PairPotential, Placement,
-    Profile, StepEnergy, Steps, TerraceMap, TerraceOptions, profile,
+    Layout, LevelSet, NearMinimum, PairPotential, Placement, Profile, StepEnergy, Steps,
+    TerraceMap, TerraceOptions,
 };
 use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;
 
+use crate::config::init::{Configuration, read_attitudes, read_orientations};
 use crate::config::scene::{
-    NearMinimumSpec, PlacementSpec, PotentialSpec, Scene, SceneError, SearchMethodSpec,
+    NearMinimumSpec, Orientations, PlacementSpec, Scene, SceneError, SearchMethodSpec,
     StepEnergySpec, TerraceSpec,
 };
-use crate::engine::potential::Potentials;
 use crate::models::rotor::{Rotor, Top, TopInertia};
 use crate::models::search::{SearchMethod, SearchSettings};
-use crate::models::terraced::{
-    BodySpecies, PairTable, PairTerraces, Rigid, RodSpecies, Terraced, draw_omega, radial_steps,
-};
+use crate::models::terraced::{BodySpecies, PairTable, Rigid, RodSpecies, Terraced, draw_omega};
 
 /// SSD/E water on terraces, between rigid tops.
 pub type Water = Rigid<potential::SoftStickyDipole>;
-
-/// The type of an absent profile (Gay–Berne has none).
-type NoProfile = Profile<fn(f64) -> f64>;
-
-/// The interaction model a scene asks for, built (scene in internal units).
-pub enum Plan {
-    /// Stepped radial potentials (given as steps, or Lennard-Jones terraces made radial).
-    Spheres(Potentials),
-    /// The modified Lennard-Jones rods of 003 Eqs. 22–23.
-    Rods(Vec<PairTable<LjRod>>),
-    /// Gay–Berne rods.
-    GayBerne(Vec<PairTable<GayBerne>>),
-    /// Rigid tops on SSD/E water.
-    Tops(Vec<PairTable<Water>>),
-    /// Rigid site molecules with stepped site–site potentials (issue 10).
-    Sites(crate::config::site_scene::SitesPlan),
-    /// Semi-flexible molecules (species with `bonds`): RATTLE between events.
-    Flexible(crate::config::flexible_scene::FlexiblePlan),
-}
-
-impl Plan {
-    /// Builds the model tables of a checked scene in internal units.
-    ///
-    /// # Errors
-    /// [`SceneError::Invalid`] naming the pair table whose potential or terraces fail.
-    pub fn of(scene: &Scene) -> Result<Plan, SceneError> {
-        // Messages give energies in the scene's units.
-        let scale = crate::config::units::Units::of(scene.units).energy;
-        let names: Vec<&str> = scene.species.iter().map(|s| s.name.as_str()).collect();
-        let index = |n: &str| names.iter().position(|&m| m == n).expect("checked");
-        let kt = scene.init.temperature;
-        if scene.has_bonds() {
-            return Ok(Plan::Flexible(
-                crate::config::flexible_scene::FlexiblePlan::of(scene)?,
-            ));
-        }
-        if scene.has_sites() {
-            return Ok(Plan::Sites(crate::config::site_scene::SitesPlan::of(
-                scene,
-            )?));
-        }
-        let first = scene.pair.first().and_then(|p| p.potential);
-        match first {
-            None => Ok(Plan::Spheres(Potentials::from_scene(scene))),
-            Some(PotentialSpec::LennardJones { .. })
-            | Some(PotentialSpec::Rods { zeta: 0.0, .. }) => {
-                let mut tables = Vec::new();
-                for (k, p) in scene.pair.iter().enumerate() {
-                    let (epsilon, sigma) = match p.potential.expect("checked") {
-                        PotentialSpec::LennardJones { epsilon, sigma }
-                        | PotentialSpec::Rods { epsilon, sigma, .. } => (epsilon, sigma),
-                        PotentialSpec::GayBerne { .. } | PotentialSpec::SsdE { .. } => {
-                            unreachable!("checked")
-                        }
-                    };
-                    let lj =
-                        LennardJones::new(epsilon, sigma).map_err(|e| potential_error(k, e))?;
-                    let prof =
-                        profile::lennard_jones(&lj).map_err(|e| terrace_error(k, e, scale))?;
-                    let t = p.terraces.as_ref().expect("checked");
-                    let map = terrace_map(k, &lj, Some(&prof), t, kt, scale)?;
-                    let steps =
-                        radial_steps(&prof, &map).map_err(|e| terrace_error(k, e, scale))?;
-                    tables.push(((index(&p.species[0]), index(&p.species[1])), steps));
-                }
-                Ok(Plan::Spheres(Potentials::from_tables(names.len(), &tables)))
-            }
-            Some(PotentialSpec::Rods { .. }) => {
-                let mut tables = Vec::new();
-                for (k, p) in scene.pair.iter().enumerate() {
-                    let PotentialSpec::Rods {
-                        epsilon,
-                        sigma,
-                        zeta,
-                    } = p.potential.expect("checked")
-                    else {
-                        unreachable!("checked: one kind per scene")
-                    };
-                    let rod =
-                        LjRod::new(epsilon, sigma, zeta).map_err(|e| potential_error(k, e))?;
-                    let prof = profile::rods(&rod).map_err(|e| terrace_error(k, e, scale))?;
-                    let t = p.terraces.as_ref().expect("checked");
-                    let map = terrace_map(k, &rod, Some(&prof), t, kt, scale)?;
-                    let terraces = PairTerraces::new(rod, map).map_err(|e| {
-                        SceneError::invalid(format!("pair[{k}].terraces"), e.to_string())
-                    })?;
-                    tables.push(((index(&p.species[0]), index(&p.species[1])), terraces));
-                }
-                Ok(Plan::Rods(tables))
-            }
-            Some(PotentialSpec::GayBerne { .. }) => {
-                let mut tables = Vec::new();
-                for (k, p) in scene.pair.iter().enumerate() {
-                    let PotentialSpec::GayBerne {
-                        sigma0,
-                        epsilon0,
-                        kappa,
-                        kappa_prime,
-                        mu,
-                        nu,
-                    } = p.potential.expect("checked")
-                    else {
-                        unreachable!("checked: one kind per scene")
-                    };
-                    let gb = GayBerne::new(sigma0, epsilon0, kappa, kappa_prime, mu, nu)
-                        .map_err(|e| potential_error(k, e))?;
-                    let t = p.terraces.as_ref().expect("checked");
-                    let none: Option<&NoProfile> = None;
-                    let map = terrace_map(k, &gb, none, t, kt, scale)?;
-                    let terraces = PairTerraces::with_outer_reach(gb, map).map_err(|e| {
-                        SceneError::invalid(format!("pair[{k}].terraces"), e.to_string())
-                    })?;
-                    tables.push(((index(&p.species[0]), index(&p.species[1])), terraces));
-                }
-                Ok(Plan::GayBerne(tables))
-            }
-            Some(PotentialSpec::SsdE { .. }) => {
-                let mut tables = Vec::new();
-                for (k, p) in scene.pair.iter().enumerate() {
-                    let PotentialSpec::SsdE { energy_unit } = p.potential.expect("checked") else {
-                        unreachable!("checked: one kind per scene")
-                    };
-                    let water = Rigid(ssd_e(energy_unit).map_err(|e| potential_error(k, e))?);
-                    let t = p.terraces.as_ref().expect("checked");
-                    let map = plain_terrace_map(
-                        k,
-                        potential::RigidPairPotential::minimum(&water.0),
-                        t,
-                        kt,
-                        scale,
-                    )?;
-                    let terraces = PairTerraces::new(water, map).map_err(|e| {
-                        SceneError::invalid(format!("pair[{k}].terraces"), e.to_string())
-                    })?;
-                    tables.push(((index(&p.species[0]), index(&p.species[1])), terraces));
-                }
-                Ok(Plan::Tops(tables))
-            }
-        }
-    }
-
-    /// The interaction reach (the largest of all pairs).
-    pub fn reach(&self) -> f64 {
-        match self {
-            Plan::Spheres(p) => p.reach(),
-            Plan::Rods(t) => t.iter().map(|(_, p)| p.reach()).fold(0.0, f64::max),
-            Plan::GayBerne(t) => t.iter().map(|(_, p)| p.reach()).fold(0.0, f64::max),
-            Plan::Tops(t) => t.iter().map(|(_, p)| p.reach()).fold(0.0, f64::max),
-            Plan::Sites(p) => p.reach(),
-            Plan::Flexible(p) => p.reach(),
-        }
-    }
-
-    /// The model's name in the summary.
-    pub fn name(&self) -> &'static str {
-        match self {
-            Plan::Spheres(p) if p.all_hard_spheres() => "hard-spheres",
-            Plan::Spheres(_) => "stepped",
-            Plan::Rods(_) => "terraced-rods",
-            Plan::GayBerne(_) => "terraced-gay-berne",
-            Plan::Tops(_) => "terraced-tops",
-            Plan::Sites(_) => "rigid-sites",
-            Plan::Flexible(_) => "semi-flexible",
-        }
-    }
-}
-
-/// SSD/E with its energies in internal units (`energy_unit` per kJ/mol): `ε`, `ν₀`, `ν₀'`
-/// scaled, the dipole by `√energy_unit` (the dipolar energy goes as `μ²`).
-pub(crate) fn ssd_e(
-    energy_unit: f64,
-) -> Result<potential::SoftStickyDipole, potential::PotentialError> {
-    let p = potential::SsdParameters::SSD_E;
-    potential::SoftStickyDipole::new(potential::SsdParameters {
-        epsilon: p.epsilon * energy_unit,
-        nu0: p.nu0 * energy_unit,
-        nu0_prime: p.nu0_prime * energy_unit,
-        dipole: p.dipole * energy_unit.sqrt(),
-        ..p
-    })
-}
 
 /// The core and near-minimum rule of a pair's terraces.
 fn terrace_options(t: &TerraceSpec) -> TerraceOptions {
@@ -227,7 +48,7 @@ fn terrace_options(t: &TerraceSpec) -> TerraceOptions {
 /// The terrace map that needs nothing of the potential but its (lower bound on the)
 /// `minimum`: the paper's evenly spaced levels, or explicit levels with their energies (the
 /// placement and step-energy rules need a radial profile: [`terrace_map`]).
-fn plain_terrace_map(
+pub(crate) fn plain_terrace_map(
     k: usize,
     minimum: f64,
     t: &TerraceSpec,
@@ -285,6 +106,86 @@ pub fn tops_model(
         tables,
         body_species,
         &poses,
+        &omegas,
+        0.0,
+        search_settings(scene),
+        scene.seed ^ 0x5ea2_c400_0000_0007,
+    )
+    .map_err(|e| SceneError::invalid("search", e.to_string()))
+}
+
+/// [`tops_model`] with a start file's attitudes when it gives the angular velocities
+/// (`omegas`, lab frame): a start file gives tops their whole attitudes.
+///
+/// # Errors
+/// As [`tops_model`], and [`SceneError::Invalid`] naming `init.velocities` for a file without
+/// attitudes.
+pub fn tops_model_of(
+    scene: &Scene,
+    base: &Path,
+    config: &Configuration,
+    tables: Vec<PairTable<Water>>,
+    omegas: Option<&[DVec3]>,
+) -> Result<Terraced<Water>, SceneError> {
+    let start = match omegas {
+        Some(w) => {
+            let file = base.join(scene.init.file.as_ref().expect("checked"));
+            let n = config.positions.len();
+            Some((
+                read_attitudes(scene, &file, n, "init.velocities")?,
+                w.to_vec(),
+            ))
+        }
+        None => None,
+    };
+    tops_model(scene, &config.species, tables, start)
+}
+
+/// The terraced model of a rods scene: orientations, and equipartitioned angular velocities or
+/// a start file's (`omegas`, lab frame: their component along each rod's axis, round-off of
+/// the file's numbers, is dropped, as a linear rotor has none).
+///
+/// # Errors
+/// [`SceneError::Invalid`] naming `init.orientations` for a bad file, `search` when the model
+/// refuses its settings.
+pub fn rods_model<P: PairPotential>(
+    scene: &Scene,
+    base: &Path,
+    config: &Configuration,
+    tables: Vec<PairTable<P>>,
+    omegas: Option<&[DVec3]>,
+) -> Result<Terraced<P>, SceneError> {
+    let n = config.positions.len();
+    let axes = match scene.init.orientations {
+        Orientations::Random => random_axes(n, scene.seed),
+        Orientations::Aligned => {
+            let a = glam::DVec3::from(scene.init.axis.expect("checked")).normalize();
+            vec![a; n]
+        }
+        Orientations::File => {
+            let file = scene.init.file.as_ref().expect("checked");
+            read_orientations(scene, &base.join(file), n)?
+        }
+    };
+    let species = rod_species(scene);
+    let inertia: Vec<f64> = config
+        .species
+        .iter()
+        .map(|&s| species[s as usize].inertia)
+        .collect();
+    let omegas = match omegas {
+        Some(w) => w
+            .iter()
+            .zip(&axes)
+            .map(|(&w, &a)| w - w.dot(a) * a)
+            .collect(),
+        None => equipartitioned_omegas(&axes, &inertia, scene.init.temperature, scene.seed),
+    };
+    Terraced::new(
+        species,
+        tables,
+        &config.species,
+        &axes,
         &omegas,
         0.0,
         search_settings(scene),
@@ -373,13 +274,13 @@ pub fn random_attitudes(n: usize, seed: u64) -> Vec<glam::DQuat> {
         .collect()
 }
 
-fn potential_error(k: usize, e: potential::PotentialError) -> SceneError {
+pub(crate) fn potential_error(k: usize, e: potential::PotentialError) -> SceneError {
     SceneError::invalid(format!("pair[{k}].potential"), e.to_string())
 }
 
 /// A terrace map's error for pair table `k`, energies divided by `scale` (internal per scene
 /// unit).
-fn terrace_error(k: usize, e: potential::PotentialError, scale: f64) -> SceneError {
+pub(crate) fn terrace_error(k: usize, e: potential::PotentialError, scale: f64) -> SceneError {
     let key = format!("pair[{k}].terraces");
     let out = |x: f64| x / scale;
     let problem = match e {
@@ -405,7 +306,7 @@ fn terrace_error(k: usize, e: potential::PotentialError, scale: f64) -> SceneErr
 }
 
 /// The terrace map of a pair table (003 Eq. 7 and the placement and step-energy rules).
-fn terrace_map<P: PairPotential, F: Fn(f64) -> f64>(
+pub(crate) fn terrace_map<P: PairPotential, F: Fn(f64) -> f64>(
     k: usize,
     pot: &P,
     prof: Option<&Profile<F>>,
@@ -487,12 +388,8 @@ pub fn search_settings(scene: &Scene) -> SearchSettings {
             step = step.min(0.076 * (smallest / kt).sqrt());
         }
         for p in &scene.pair {
-            let sigma = match p.potential {
-                Some(PotentialSpec::Rods { sigma, .. })
-                | Some(PotentialSpec::LennardJones { sigma, .. }) => sigma,
-                Some(PotentialSpec::GayBerne { sigma0, .. }) => sigma0,
-                Some(PotentialSpec::SsdE { .. }) => potential::SsdParameters::SSD_E.sigma,
-                None => continue,
+            let Some(sigma) = p.potential.map(|q| q.describe().lengths().0) else {
+                continue;
             };
             step = step.min(0.0064 * sigma * (s.mass / kt).sqrt());
         }

@@ -17,6 +17,8 @@ use std::path::PathBuf;
 
 use serde::{Deserialize, Deserializer};
 
+use crate::analysis::output::Drawing;
+
 /// The scene format this version of `dmd` reads.
 pub const FORMAT_VERSION: u32 = 1;
 
@@ -468,91 +470,190 @@ pub struct PairSpec {
     pub terraces: Option<TerraceSpec>,
 }
 
-/// A smooth pair potential (crate `potential`).
+/// A smooth pair potential (crate `potential`), by its `kind`.
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
-#[serde(tag = "kind", rename_all = "kebab-case", deny_unknown_fields)]
+#[serde(tag = "kind", rename_all = "kebab-case")]
 pub enum PotentialSpec {
     /// The modified Lennard-Jones rods of 003 Eqs. 22–23.
-    Rods {
-        /// Well depth ε.
-        epsilon: f64,
-        /// Diameter σ.
-        sigma: f64,
-        /// Orientation shift ζ of the effective distance.
-        zeta: f64,
-    },
+    Rods(LjRodsSpec),
     /// Lennard-Jones spheres (003 Eq. 22 with ζ = 0): terraces become radial steps with
     /// analytic event times.
-    LennardJones {
-        /// Well depth ε.
-        epsilon: f64,
-        /// Diameter σ.
-        sigma: f64,
-    },
+    LennardJones(LennardJonesSpec),
     /// Gay–Berne GB(κ, κ', μ, ν) (defaults GB(3, 5, 2, 1)).
-    GayBerne {
-        /// Breadth σ₀.
-        sigma0: f64,
-        /// Energy scale ε₀.
-        epsilon0: f64,
-        /// Length-to-breadth ratio κ.
-        #[serde(default = "gb_kappa")]
-        kappa: f64,
-        /// Side-by-side to end-to-end well-depth ratio κ'.
-        #[serde(default = "gb_kappa_prime")]
-        kappa_prime: f64,
-        /// Exponent μ.
-        #[serde(default = "gb_mu")]
-        mu: f64,
-        /// Exponent ν.
-        #[serde(default = "one")]
-        nu: f64,
-    },
-    /// Soft sticky dipole water, SSD/E (Fennell and Gezelter, J. Chem. Phys. 120, 9175
-    /// (2004)) with its published parameters (`potential::SoftStickyDipole::ssd_e`): bodies
-    /// are rigid asymmetric tops with `moments`; molecular units only.
-    SsdE {
-        /// Internal energy units per kJ/mol (set by `Scene::internal`, not a scene key).
-        #[serde(skip, default = "one")]
-        energy_unit: f64,
-    },
-}
-
-fn gb_kappa() -> f64 {
-    3.0
-}
-fn gb_kappa_prime() -> f64 {
-    5.0
-}
-fn gb_mu() -> f64 {
-    2.0
+    GayBerne(GayBerneSpec),
+    /// Soft sticky dipole water, SSD/E, between rigid tops; molecular units only.
+    SsdE(SsdESpec),
+    /// Stockmayer rods: Lennard-Jones plus a point dipole along each body's axis.
+    Stockmayer(StockmayerSpec),
 }
 
 impl PotentialSpec {
-    /// Whether the potential depends on the orientations (bodies must then be rods).
-    pub fn is_anisotropic(&self) -> bool {
+    /// What every kind tells about itself (object safe: checks, scales, drawing).
+    pub fn describe(&self) -> &dyn Describe {
         match self {
-            PotentialSpec::Rods { zeta, .. } => *zeta > 0.0,
-            PotentialSpec::LennardJones { .. } => false,
-            PotentialSpec::GayBerne { .. } | PotentialSpec::SsdE { .. } => true,
+            PotentialSpec::Rods(k) => k,
+            PotentialSpec::LennardJones(k) => k,
+            PotentialSpec::GayBerne(k) => k,
+            PotentialSpec::SsdE(k) => k,
+            PotentialSpec::Stockmayer(k) => k,
         }
+    }
+
+    /// As [`describe`](Self::describe), to change (the conversion to internal units).
+    pub fn describe_mut(&mut self) -> &mut dyn Describe {
+        match self {
+            PotentialSpec::Rods(k) => k,
+            PotentialSpec::LennardJones(k) => k,
+            PotentialSpec::GayBerne(k) => k,
+            PotentialSpec::SsdE(k) => k,
+            PotentialSpec::Stockmayer(k) => k,
+        }
+    }
+
+    /// Whether the potential depends on the orientations (bodies are rods or tops).
+    pub fn is_anisotropic(&self) -> bool {
+        self.describe().body() != Body::Sphere
     }
 
     /// Whether the potential reads each body's whole attitude (bodies are tops with three
     /// `moments`), not one axis.
     pub fn is_rigid(&self) -> bool {
-        matches!(self, PotentialSpec::SsdE { .. })
+        self.describe().body() == Body::Top
     }
 
     /// The kind, as written in the scene.
     pub fn kind(&self) -> &'static str {
-        match self {
-            PotentialSpec::Rods { .. } => "rods",
-            PotentialSpec::LennardJones { .. } => "lennard-jones",
-            PotentialSpec::GayBerne { .. } => "gay-berne",
-            PotentialSpec::SsdE { .. } => "ssd-e",
-        }
+        self.describe().name()
     }
+}
+
+/// The bodies a potential acts between.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Body {
+    /// Spheres: no orientation.
+    Sphere,
+    /// Linear rotors (one axis each; `species.inertia`).
+    Rod,
+    /// Rigid tops (a whole attitude; `species.moments`).
+    Top,
+}
+
+/// What the program asks of a kind that needs no type: object safe.
+pub trait Describe {
+    /// The kind, as written in the scene.
+    fn name(&self) -> &'static str;
+    /// The bodies it acts between.
+    fn body(&self) -> Body;
+    /// Checks the keys (`key(name)` is a key's full name, e.g. `pair[0].potential.sigma`).
+    ///
+    /// # Errors
+    /// [`SceneError::Invalid`] naming the first bad key.
+    fn check(&self, key: &dyn Fn(&str) -> String) -> Result<(), SceneError>;
+    /// Multiplies every energy parameter by `e` (scene → internal units).
+    fn scale_energy(&mut self, e: f64);
+    /// The depth of the well (energy; the smallest energy parameter for several).
+    fn well_depth(&self) -> f64;
+    /// σ, and the longest contact distance (length).
+    fn lengths(&self) -> (f64, f64);
+    /// How trajectories draw a body (lengths from the potential).
+    fn drawing(&self) -> Drawing;
+    /// Whether the potential has a radial profile, which level placements other than equal
+    /// energy and step-energy rules need.
+    fn has_profile(&self) -> bool {
+        false
+    }
+    /// A cut-off of the potential's own (zero beyond it), which the standard-MD engine takes
+    /// instead of smoothing it: `(r_switch, r_cut)`.
+    fn own_window(&self) -> Option<(f64, f64)> {
+        None
+    }
+    /// The standard-MD time step measured for this potential, if any (else the engine's rule).
+    fn smd_dt(&self) -> Option<f64> {
+        None
+    }
+    /// The unit system the parameters are given in, if the kind has one.
+    fn units(&self) -> Option<UnitSystem> {
+        None
+    }
+}
+
+/// The keys of `kind = "rods"`.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct LjRodsSpec {
+    /// Well depth ε.
+    pub epsilon: f64,
+    /// Diameter σ.
+    pub sigma: f64,
+    /// Orientation shift ζ of the effective distance.
+    pub zeta: f64,
+}
+
+/// The keys of `kind = "lennard-jones"` (003 Eq. 22 with ζ = 0).
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct LennardJonesSpec {
+    /// Well depth ε.
+    pub epsilon: f64,
+    /// Diameter σ.
+    pub sigma: f64,
+}
+
+/// The keys of `kind = "gay-berne"` (defaults GB(3, 5, 2, 1)).
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct GayBerneSpec {
+    /// Breadth σ₀.
+    pub sigma0: f64,
+    /// Energy scale ε₀.
+    pub epsilon0: f64,
+    /// Length-to-breadth ratio κ.
+    #[serde(default = "kappa")]
+    pub kappa: f64,
+    /// Side-by-side to end-to-end well-depth ratio κ'.
+    #[serde(default = "kappa_prime")]
+    pub kappa_prime: f64,
+    /// Exponent μ.
+    #[serde(default = "mu")]
+    pub mu: f64,
+    /// Exponent ν.
+    #[serde(default = "nu")]
+    pub nu: f64,
+}
+
+fn kappa() -> f64 {
+    3.0
+}
+fn kappa_prime() -> f64 {
+    5.0
+}
+fn mu() -> f64 {
+    2.0
+}
+fn nu() -> f64 {
+    1.0
+}
+
+/// The keys of `kind = "ssd-e"`: none (the published parameters); bodies are rigid tops
+/// with `moments`.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SsdESpec {
+    /// Internal energy units per kJ/mol (set by `Scene::internal`, not a scene key).
+    #[serde(skip, default = "one")]
+    pub energy_unit: f64,
+}
+
+/// The keys of `kind = "stockmayer"`.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct StockmayerSpec {
+    /// Well depth ε of the Lennard-Jones part.
+    pub epsilon: f64,
+    /// Diameter σ.
+    pub sigma: f64,
+    /// Dipole moment μ (`μ²` an energy × length³).
+    pub dipole: f64,
 }
 
 /// Where the terrace levels go (see `potential::Placement`).
@@ -1638,10 +1739,24 @@ impl Scene {
             .first()
             .and_then(|p| p.potential)
             .is_some_and(|q| q.is_rigid());
-        if tops && self.units != UnitSystem::Molecular {
+        if let Some(q) = self.pair.first().and_then(|p| p.potential)
+            && let Some(units) = q.describe().units()
+            && units != self.units
+        {
             return Err(SceneError::invalid(
                 "units",
-                "`ssd-e` is parameterised in kJ/mol, Å and g/mol: set units = \"molecular\"",
+                format!(
+                    "`{}` is parameterised in {}: set units = \"{}\"",
+                    q.kind(),
+                    match units {
+                        UnitSystem::Molecular => "kJ/mol, Å and g/mol",
+                        UnitSystem::Reduced => "reduced units",
+                    },
+                    match units {
+                        UnitSystem::Molecular => "molecular",
+                        UnitSystem::Reduced => "reduced",
+                    }
+                ),
             ));
         }
         for (k, sp) in self.species.iter().enumerate() {
@@ -1802,39 +1917,8 @@ impl Scene {
 }
 
 fn check_potential(k: usize, p: &PotentialSpec) -> Result<(), SceneError> {
-    let key = |name: &str| format!("pair[{k}].potential.{name}");
-    match *p {
-        PotentialSpec::Rods {
-            epsilon,
-            sigma,
-            zeta,
-        } => {
-            positive(&key("epsilon"), epsilon)?;
-            positive(&key("sigma"), sigma)?;
-            non_negative(&key("zeta"), zeta)?;
-        }
-        PotentialSpec::LennardJones { epsilon, sigma } => {
-            positive(&key("epsilon"), epsilon)?;
-            positive(&key("sigma"), sigma)?;
-        }
-        PotentialSpec::GayBerne {
-            sigma0,
-            epsilon0,
-            kappa,
-            kappa_prime,
-            mu,
-            nu,
-        } => {
-            positive(&key("sigma0"), sigma0)?;
-            positive(&key("epsilon0"), epsilon0)?;
-            positive(&key("kappa"), kappa)?;
-            positive(&key("kappa_prime"), kappa_prime)?;
-            positive(&key("mu"), mu)?;
-            non_negative(&key("nu"), nu)?;
-        }
-        PotentialSpec::SsdE { .. } => {}
-    }
-    Ok(())
+    p.describe()
+        .check(&|name: &str| format!("pair[{k}].potential.{name}"))
 }
 
 fn check_terraces(k: usize, p: &PotentialSpec, t: &TerraceSpec) -> Result<(), SceneError> {
@@ -1915,12 +1999,7 @@ fn check_terraces(k: usize, p: &PotentialSpec, t: &TerraceSpec) -> Result<(), Sc
     let needs_profile = t.placement != PlacementSpec::EqualEnergy
         || t.step_energy != StepEnergySpec::Equal
         || t.outermost.is_some();
-    if needs_profile
-        && matches!(
-            p,
-            PotentialSpec::GayBerne { .. } | PotentialSpec::SsdE { .. }
-        )
-    {
+    if needs_profile && !p.describe().has_profile() {
         let which = if t.placement != PlacementSpec::EqualEnergy {
             "placement"
         } else if t.step_energy != StepEnergySpec::Equal {
@@ -1930,8 +2009,11 @@ fn check_terraces(k: usize, p: &PotentialSpec, t: &TerraceSpec) -> Result<(), Sc
         };
         return Err(SceneError::invalid(
             key(which),
-            "needs a radial profile of the potential: available for `rods` and \
-             `lennard-jones`, not `gay-berne` or `ssd-e`",
+            format!(
+                "needs a radial profile of the potential, which `{}` has not: available for \
+                 `rods` and `lennard-jones`",
+                p.kind()
+            ),
         ));
     }
     Ok(())
@@ -1991,7 +2073,7 @@ pub(crate) fn positive(key: &str, x: f64) -> Result<(), SceneError> {
     }
 }
 
-fn non_negative(key: &str, x: f64) -> Result<(), SceneError> {
+pub(crate) fn non_negative(key: &str, x: f64) -> Result<(), SceneError> {
     if x.is_finite() && x >= 0.0 {
         Ok(())
     } else {

@@ -8,43 +8,16 @@ use crate::config::scene::{
     Engine, PotentialSpec, QueueKind, Scene, SceneError, ThermostatKind, ThermostatPhase,
 };
 
-/// σ of the potential, and the longest contact distance (κσ₀ for Gay–Berne, σ otherwise).
-fn lengths_of(p: &PotentialSpec) -> (f64, f64) {
-    match *p {
-        PotentialSpec::Rods { sigma, .. } | PotentialSpec::LennardJones { sigma, .. } => {
-            (sigma, sigma)
-        }
-        PotentialSpec::GayBerne { sigma0, kappa, .. } => (sigma0, sigma0 * kappa.max(1.0)),
-        PotentialSpec::SsdE { .. } => {
-            let sigma = potential::SsdParameters::SSD_E.sigma;
-            (sigma, sigma)
-        }
-    }
-}
-
-fn energy_of(p: &PotentialSpec) -> f64 {
-    match *p {
-        PotentialSpec::Rods { epsilon, .. } | PotentialSpec::LennardJones { epsilon, .. } => {
-            epsilon
-        }
-        PotentialSpec::GayBerne { epsilon0, .. } => epsilon0,
-        PotentialSpec::SsdE { energy_unit } => {
-            energy_unit * potential::SsdParameters::SSD_E.epsilon
-        }
-    }
-}
-
 /// The default smoothing window: 003 Eq. 26's `r_l = 2.5σ`, `r_u = 3σ`, shifted outwards by
 /// the contact distance beyond σ (Gay–Berne's end-to-end κσ₀), so that the potential is cut
 /// where its tail is as small as the Lennard-Jones one at 2.5σ in every orientation. SSD/E
 /// switches itself off (zero beyond its cut-off, 9 Å): its window is its own switch, not
 /// smoothed again.
 pub fn default_window(p: &PotentialSpec) -> (f64, f64) {
-    if let PotentialSpec::SsdE { .. } = p {
-        let s = potential::SsdParameters::SSD_E;
-        return (s.r_switch, s.r_cut);
+    if let Some(own) = p.describe().own_window() {
+        return own;
     }
-    let (sigma, contact) = lengths_of(p);
+    let (sigma, contact) = p.describe().lengths();
     (contact + 1.5 * sigma, contact + 2.0 * sigma)
 }
 
@@ -62,11 +35,11 @@ pub const SSD_E_DT: f64 = 0.002;
 /// give 1.75 fs, close to 003 §V.B's 1.8 fs; for Lennard-Jones at T* = 1 it is 0.0028.
 /// SSD/E water: [`SSD_E_DT`], measured.
 pub fn default_dt(p: &PotentialSpec, mass: f64, inertia: Option<f64>, kt: f64) -> f64 {
-    if let PotentialSpec::SsdE { .. } = p {
-        return SSD_E_DT;
+    if let Some(dt) = p.describe().smd_dt() {
+        return dt;
     }
-    let (sigma, _) = lengths_of(p);
-    let e = kt.max(energy_of(p));
+    let (sigma, _) = p.describe().lengths();
+    let e = kt.max(p.describe().well_depth());
     let dt = 0.0028 * sigma * (mass / e).sqrt();
     match inertia {
         Some(i) => dt.min((i / e).sqrt() / 30.0),
@@ -261,16 +234,15 @@ pub fn list_skin(
     lengths: DVec3,
 ) -> Result<f64, SceneError> {
     let half = 0.5 * lengths.min_element();
-    if r_u >= half
-        && let PotentialSpec::SsdE { .. } = pot
-    {
-        // SSD/E's cut-off is its own, not a key of the scene.
+    if r_u >= half && pot.describe().own_window().is_some() {
+        // The potential's cut-off is its own, not a key of the scene.
         return Err(SceneError::invalid(
             "box",
             format!(
-                "SSD/E's cut-off {r_u} reaches half the shortest box side {half}: a molecule \
-                 would interact with two images of another; use more molecules or a lower \
-                 density"
+                "the cut-off {r_u} of `{}` reaches half the shortest box side {half}: a body \
+                 would interact with two images of another; use more bodies or a lower \
+                 density",
+                pot.kind()
             ),
         ));
     }
@@ -294,7 +266,7 @@ pub fn list_skin(
             ),
         )),
         Some(d) => Ok(d),
-        None => Ok((0.6 * lengths_of(pot).0).min(0.9 * (half - r_u))),
+        None => Ok((0.6 * pot.describe().lengths().0).min(0.9 * (half - r_u))),
     }
 }
 
@@ -329,18 +301,18 @@ mod tests {
     #[test]
     fn defaults_for_the_papers_rods_and_lennard_jones() {
         // Internal units (Å, g/mol, ps, 10 J/mol): ε = 300, kT = 1.4 ε = 420.
-        let rods = PotentialSpec::Rods {
+        let rods = PotentialSpec::Rods(crate::config::scene::LjRodsSpec {
             epsilon: 300.0,
             sigma: 3.035,
             zeta: 1.0,
-        };
+        });
         let dt = default_dt(&rods, 18.0, Some(1.154), 420.0);
         assert!((dt - 0.00175).abs() < 0.00002, "dt = {dt} ps");
         assert_eq!(default_window(&rods), (2.5 * 3.035, 3.0 * 3.035));
-        let lj = PotentialSpec::LennardJones {
+        let lj = PotentialSpec::LennardJones(crate::config::scene::LennardJonesSpec {
             epsilon: 1.0,
             sigma: 1.0,
-        };
+        });
         // At T* = 1 the energy scale is ε; at T* = 4 it is kT.
         assert_eq!(default_dt(&lj, 1.0, None, 1.0), 0.0028);
         assert_eq!(default_dt(&lj, 1.0, None, 4.0), 0.0014);

@@ -164,12 +164,7 @@ impl Scene {
                 step[1] *= e;
             }
             if let Some(pot) = &mut p.potential {
-                use crate::config::scene::PotentialSpec::*;
-                match pot {
-                    Rods { epsilon, .. } | LennardJones { epsilon, .. } => *epsilon *= e,
-                    GayBerne { epsilon0, .. } => *epsilon0 *= e,
-                    SsdE { energy_unit } => *energy_unit *= e,
-                }
+                pot.describe_mut().scale_energy(e);
             }
             if let Some(t) = &mut p.terraces {
                 let scale = |x: &mut Option<f64>| {

@@ -20,15 +20,14 @@ use crate::analysis::output::{
     write_csv,
 };
 use crate::config::init::{
-    Configuration, ase_momentum_unit, lattice, maxwell_boltzmann, read_attitudes, read_motion,
-    read_orientations, read_xyz, rod_semi_axes,
+    Configuration, ase_momentum_unit, lattice, maxwell_boltzmann, read_motion, read_xyz,
+    rod_semi_axes,
 };
-use crate::config::rods::{
-    Plan, equipartitioned_omegas, random_axes, rod_species, search_settings,
-};
+use crate::config::kinds::{Kind, TerracedPlan, Visit};
+use crate::config::plan::Plan;
 use crate::config::scene::{
-    AcceptKind, EnsembleKind, Orientations, Positions, QueueKind, Scene, SceneError,
-    ThermostatKind, ThermostatPhase, Velocities,
+    AcceptKind, EnsembleKind, Positions, QueueKind, Scene, SceneError, ThermostatKind,
+    ThermostatPhase, Velocities,
 };
 use crate::config::units::Units;
 use crate::driver::checkpoint::{
@@ -54,7 +53,6 @@ use crate::analysis::output::short;
 use crate::engine::simulation::{Andersen, LoopSettings, Progress, SetupError, Simulation, Stop};
 use crate::models::rotor::TopInertia;
 use crate::models::search::SearchStats;
-use crate::models::terraced::{PairTable, Terraced};
 
 /// What a run does besides the scene (issue 9): checkpoints, and resuming from one.
 #[derive(Debug, Default)]
@@ -482,7 +480,7 @@ fn set_up<G: Go>(
         .collect();
     // A start file's own velocities (and angular velocities of rods and tops), or
     // Maxwell–Boltzmann ones; a resumed run takes its state from the checkpoint.
-    let rotating = matches!(plan, Plan::Rods(_) | Plan::GayBerne(_) | Plan::Tops(_));
+    let rotating = matches!(plan, Plan::Terraced(_));
     let motion = match (&options.resume, scene.init.velocities) {
         (None, Velocities::File) => {
             let file = base.join(scene.init.file.as_ref().expect("checked"));
@@ -617,40 +615,15 @@ fn set_up<G: Go>(
                 }
             }
         }
-        Plan::Rods(tables) => {
-            ctx.smooth.set(crate::config::rods::estimator(
-                scene,
-                config.lengths,
-                &tables,
-            )?);
-            let model = terraced_model(scene, base, &config, tables, omegas.as_deref())?;
-            go_any_queue(&ctx, g, model)
-        }
-        Plan::GayBerne(tables) => {
-            ctx.smooth.set(crate::config::rods::estimator(
-                scene,
-                config.lengths,
-                &tables,
-            )?);
-            let model = terraced_model(scene, base, &config, tables, omegas.as_deref())?;
-            go_any_queue(&ctx, g, model)
-        }
-        Plan::Tops(tables) => {
-            ctx.smooth.set(crate::config::rods::tops_estimator(
-                scene,
-                config.lengths,
-                &tables,
-            )?);
-            // A start file gives tops their whole attitudes with their angular velocities.
-            let start = match omegas {
-                Some(w) => {
-                    let file = base.join(scene.init.file.as_ref().expect("checked"));
-                    Some((read_attitudes(scene, &file, n, "init.velocities")?, w))
-                }
-                None => None,
-            };
-            let model = crate::config::rods::tops_model(scene, &config.species, tables, start)?;
-            go_any_queue(&ctx, g, model)
+        Plan::Terraced(plan) => {
+            let spec = plan.spec;
+            spec.visit(TerracedGo {
+                ctx: &ctx,
+                g,
+                plan,
+                base,
+                omegas: omegas.as_deref(),
+            })
         }
         Plan::Sites(plan) => {
             let model = crate::config::site_scene::model(scene, &config, plan, resumed)?;
@@ -710,24 +683,19 @@ fn layout_of(scene: &Scene, plan: &Plan, units: &Units) -> Layout {
             Vec::new(),
             Vec::new(),
         ),
-        Plan::Rods(_) | Plan::GayBerne(_) => (
+        Plan::Terraced(t) => (
             species
                 .iter()
-                .map(|name| Drawing::Rod {
-                    semi_axes: rod(name),
+                .map(|name| match t.spec.describe().drawing() {
+                    Drawing::Rod { .. } => Drawing::Rod {
+                        semi_axes: rod(name),
+                    },
+                    d => d,
                 })
                 .collect(),
             Vec::new(),
             rotor_moments(),
         ),
-        Plan::Tops(_) => {
-            let (centres, diameters) = crate::config::rods::water_drawing();
-            (
-                vec![Drawing::Sites { centres, diameters }; species.len()],
-                Vec::new(),
-                rotor_moments(),
-            )
-        }
         Plan::Sites(p) => (
             p.types
                 .iter()
@@ -775,53 +743,26 @@ fn layout_of(scene: &Scene, plan: &Plan, units: &Units) -> Layout {
     layout
 }
 
-/// The terraced model of a rods scene: orientations, and equipartitioned angular velocities or
-/// a start file's (`omegas`, lab frame: their component along each rod's axis, round-off of
-/// the file's numbers, is dropped, as a linear rotor has none).
-fn terraced_model<P: potential::PairPotential>(
-    scene: &Scene,
-    base: &Path,
-    config: &Configuration,
-    tables: Vec<PairTable<P>>,
-    omegas: Option<&[DVec3]>,
-) -> Result<Terraced<P>, RunError> {
-    let n = config.positions.len();
-    let axes = match scene.init.orientations {
-        Orientations::Random => random_axes(n, scene.seed),
-        Orientations::Aligned => {
-            let a = glam::DVec3::from(scene.init.axis.expect("checked")).normalize();
-            vec![a; n]
-        }
-        Orientations::File => {
-            let file = scene.init.file.as_ref().expect("checked");
-            read_orientations(scene, &base.join(file), n)?
-        }
-    };
-    let species = rod_species(scene);
-    let inertia: Vec<f64> = config
-        .species
-        .iter()
-        .map(|&s| species[s as usize].inertia)
-        .collect();
-    let omegas = match omegas {
-        Some(w) => w
-            .iter()
-            .zip(&axes)
-            .map(|(&w, &a)| w - w.dot(a) * a)
-            .collect(),
-        None => equipartitioned_omegas(&axes, &inertia, scene.init.temperature, scene.seed),
-    };
-    Terraced::new(
-        species,
-        tables,
-        &config.species,
-        &axes,
-        &omegas,
-        0.0,
-        search_settings(scene),
-        scene.seed ^ 0x5ea2_c400_0000_0007,
-    )
-    .map_err(|e| SceneError::invalid("search", e.to_string()).into())
+/// Builds the terraced model of kind `K` from its plan and runs `g` on it.
+struct TerracedGo<'a, G> {
+    ctx: &'a Context<'a>,
+    g: G,
+    plan: TerracedPlan,
+    base: &'a Path,
+    omegas: Option<&'a [DVec3]>,
+}
+
+impl<G: Go> Visit for TerracedGo<'_, G> {
+    type Out = Result<G::Out, RunError>;
+
+    fn visit<K: Kind>(self, _: &K) -> Self::Out {
+        let ctx = self.ctx;
+        let tables = self.plan.take::<K>();
+        ctx.smooth
+            .set(K::estimator(ctx.scene, ctx.config.lengths, &tables)?);
+        let model = K::model(ctx.scene, self.base, ctx.config, tables, self.omegas)?;
+        go_any_queue(ctx, self.g, model)
+    }
 }
 
 struct Context<'a> {

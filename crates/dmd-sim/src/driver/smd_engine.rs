@@ -31,11 +31,8 @@
 use std::path::Path;
 
 use glam::{DMat3, DQuat, DVec3};
-use potential::{GayBerne, LennardJones, LjRod, Smoothed, SoftStickyDipole};
 use serde::Serialize;
-use smd::{
-    BodyModel, Integrator, Interaction, Observer, Rigid, Settings, SmdError, Snapshot, System,
-};
+use smd::{BodyModel, Integrator, Interaction, Observer, Settings, SmdError, Snapshot, System};
 
 use crate::analysis::observable::{Correlations, Observers, Rdf, Series};
 use crate::analysis::output::{
@@ -45,11 +42,11 @@ use crate::config::init::{
     Configuration, ase_momentum_unit, lattice, maxwell_boltzmann, read_attitudes, read_motion,
     read_orientations, read_xyz, rod_semi_axes,
 };
-use crate::config::rods::{equipartitioned_omegas, random_axes, ssd_e, tops_start};
+use crate::config::kinds::{Kind, Visit};
+use crate::config::rods::{equipartitioned_omegas, random_axes, tops_start};
 pub use crate::config::scene::{Engine, SmdSpec, SmoothingSpec};
 use crate::config::scene::{
-    Orientations, Positions, PotentialSpec, Scene, SceneError, ThermostatKind, UnitSystem,
-    Velocities,
+    Orientations, Positions, Scene, SceneError, ThermostatKind, UnitSystem, Velocities,
 };
 use crate::config::smd_spec::{check, default_dt, ignored_keys, list_skin, window};
 use crate::config::units::Units;
@@ -57,14 +54,6 @@ use crate::driver::reporting::{PhaseEnd, Quiet, Reporter, RunError, RunPlan, thr
 use crate::engine::body::Body;
 use crate::engine::simulation::{Progress, Sampler, Stop, View};
 use crate::models::rotor::TopInertia;
-
-/// The pair potential of an smd run: smoothed by the window, or (SSD/E) as it is.
-enum Smooth {
-    Lj(LennardJones),
-    Rod(LjRod),
-    Gb(GayBerne),
-    Ssd(SoftStickyDipole),
-}
 
 /// What an smd run wrote to `summary.json`. The fields it shares with the event-driven
 /// engine's `Summary` (module `run`) have the same names, meanings and units (the
@@ -389,39 +378,22 @@ pub fn run_named(
         reporter,
         name: name.map(str::to_owned),
     };
-    let pot_err = |e: potential::PotentialError| -> RunError {
-        SceneError::invalid("pair[0].potential", e.to_string()).into()
-    };
-    match pot {
-        PotentialSpec::Rods {
-            epsilon,
-            sigma,
-            zeta,
-        } if zeta > 0.0 => job.go(
-            system,
-            Smooth::Rod(LjRod::new(epsilon, sigma, zeta).map_err(pot_err)?),
-        ),
-        PotentialSpec::Rods { epsilon, sigma, .. }
-        | PotentialSpec::LennardJones { epsilon, sigma } => job.go(
-            system,
-            Smooth::Lj(LennardJones::new(epsilon, sigma).map_err(pot_err)?),
-        ),
-        PotentialSpec::SsdE { energy_unit } => {
-            job.go(system, Smooth::Ssd(ssd_e(energy_unit).map_err(pot_err)?))
-        }
-        PotentialSpec::GayBerne {
-            sigma0,
-            epsilon0,
-            kappa,
-            kappa_prime,
-            mu,
-            nu,
-        } => job.go(
-            system,
-            Smooth::Gb(
-                GayBerne::new(sigma0, epsilon0, kappa, kappa_prime, mu, nu).map_err(pot_err)?,
-            ),
-        ),
+    pot.visit(SmdGo { job, system })
+}
+
+/// Runs a job on kind `K`'s force field: the force loop is compiled for each kind.
+struct SmdGo<'a> {
+    job: Job<'a>,
+    system: System,
+}
+
+impl Visit for SmdGo<'_> {
+    type Out = Result<SmdSummary, RunError>;
+
+    fn visit<K: Kind>(self, kind: &K) -> Self::Out {
+        let field = kind.smd(self.job.window)?;
+        let model = format!("smd-{}", kind.name());
+        self.job.integrate(self.system, field, &model)
     }
 }
 
@@ -447,34 +419,6 @@ struct Job<'a> {
 const REPORTS: u64 = 200;
 
 impl Job<'_> {
-    fn go(self, system: System, pot: Smooth) -> Result<SmdSummary, RunError> {
-        let (r_l, r_u) = self.window;
-        let err = |e: potential::PotentialError| -> RunError {
-            SceneError::invalid("smd.smoothing", e.to_string()).into()
-        };
-        // Static dispatch per potential: the force loop is compiled for each.
-        match pot {
-            Smooth::Lj(p) => self.integrate(
-                system,
-                Smoothed::new(p, r_l, r_u).map_err(err)?,
-                "smd-lennard-jones",
-            ),
-            Smooth::Rod(p) => {
-                self.integrate(system, Smoothed::new(p, r_l, r_u).map_err(err)?, "smd-rods")
-            }
-            Smooth::Gb(p) => self.integrate(
-                system,
-                Smoothed::new(p, r_l, r_u).map_err(err)?,
-                "smd-gay-berne",
-            ),
-            Smooth::Ssd(p) => self.integrate(
-                system,
-                Rigid::new(p, p.cutoff()).map_err(smd_error)?,
-                "smd-ssd-e",
-            ),
-        }
-    }
-
     fn integrate<F: Interaction>(
         mut self,
         system: System,
@@ -628,11 +572,7 @@ impl Job<'_> {
                     (Drawing::Rod { semi_axes }, vec![[i, i, 0.0]])
                 }
                 _ => {
-                    let sigma = match pot {
-                        Some(PotentialSpec::LennardJones { sigma, .. })
-                        | Some(PotentialSpec::Rods { sigma, .. }) => *sigma,
-                        _ => 1.0,
-                    };
+                    let sigma = pot.map_or(1.0, |p| p.describe().lengths().0);
                     (Drawing::Sphere { diameter: sigma }, Vec::new())
                 }
             };

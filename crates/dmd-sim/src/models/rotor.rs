@@ -23,11 +23,11 @@ use rigid_free::{FreeMotion, LinearRotor, Moments};
 
 /// The exact free rotation of one body since its anchor (module documentation). Times are
 /// measured from the anchor.
-pub trait Rotor: Copy + std::fmt::Debug + PartialEq {
+pub trait Rotor: Copy + std::fmt::Debug + PartialEq + Send + Sync + 'static {
     /// A species' rotational inertia.
-    type Inertia: Copy + std::fmt::Debug + PartialEq;
+    type Inertia: Copy + std::fmt::Debug + PartialEq + Send + Sync + 'static;
     /// What a pair potential reads of the body's attitude.
-    type Pose: Copy + std::fmt::Debug;
+    type Pose: Copy + std::fmt::Debug + Send + Sync + 'static;
     /// The body of the impulse rule.
     type Body: collide::Body;
     /// Numbers per rotor in a saved state.

@@ -1,0 +1,120 @@
+//! `kind = "lennard-jones"`: Lennard-Jones spheres, whose terraces are radial steps.
+
+use std::path::Path;
+
+use glam::DVec3;
+use potential::{LennardJones, Smoothed, profile};
+
+use super::Kind;
+use crate::analysis::output::Drawing;
+use crate::analysis::smooth::Evaluate;
+use crate::config::init::Configuration;
+use crate::config::rods::{estimator, potential_error, rods_model, terrace_error, terrace_map};
+use crate::config::scene::{
+    Body, Describe, LennardJonesSpec, PotentialSpec, Scene, SceneError, TerraceSpec, positive,
+};
+use crate::models::terraced::{PairTable, PairTerraces, Terraced, radial_steps};
+
+impl LennardJonesSpec {
+    fn potential(&self, k: usize) -> Result<LennardJones, SceneError> {
+        LennardJones::new(self.epsilon, self.sigma).map_err(|e| potential_error(k, e))
+    }
+}
+
+impl Describe for LennardJonesSpec {
+    fn name(&self) -> &'static str {
+        "lennard-jones"
+    }
+    fn body(&self) -> Body {
+        Body::Sphere
+    }
+    fn check(&self, key: &dyn Fn(&str) -> String) -> Result<(), SceneError> {
+        positive(&key("epsilon"), self.epsilon)?;
+        positive(&key("sigma"), self.sigma)
+    }
+    fn scale_energy(&mut self, e: f64) {
+        self.epsilon *= e;
+    }
+    fn well_depth(&self) -> f64 {
+        self.epsilon
+    }
+    fn lengths(&self) -> (f64, f64) {
+        (self.sigma, self.sigma)
+    }
+    fn drawing(&self) -> Drawing {
+        Drawing::Sphere {
+            diameter: self.sigma,
+        }
+    }
+    fn has_profile(&self) -> bool {
+        true
+    }
+}
+
+impl Kind for LennardJonesSpec {
+    const MODEL: &'static str = "stepped";
+    type Terraced = LennardJones;
+    type Smd = Smoothed<LennardJones>;
+
+    /// Rods with `ζ = 0` too.
+    fn select(spec: &PotentialSpec) -> Option<Self> {
+        match spec {
+            PotentialSpec::LennardJones(k) => Some(*k),
+            PotentialSpec::Rods(k) if k.zeta == 0.0 => Some(k.as_spheres()),
+            _ => None,
+        }
+    }
+
+    fn radial_steps(
+        &self,
+        k: usize,
+        t: &TerraceSpec,
+        kt: f64,
+        scale: f64,
+    ) -> Option<Result<Vec<[f64; 2]>, SceneError>> {
+        let steps = || {
+            let lj = self.potential(k)?;
+            let prof = profile::lennard_jones(&lj).map_err(|e| terrace_error(k, e, scale))?;
+            let map = terrace_map(k, &lj, Some(&prof), t, kt, scale)?;
+            radial_steps(&prof, &map).map_err(|e| terrace_error(k, e, scale))
+        };
+        Some(steps())
+    }
+
+    fn terraces(
+        &self,
+        k: usize,
+        t: &TerraceSpec,
+        kt: f64,
+        scale: f64,
+    ) -> Result<PairTerraces<LennardJones>, SceneError> {
+        let lj = self.potential(k)?;
+        let prof = profile::lennard_jones(&lj).map_err(|e| terrace_error(k, e, scale))?;
+        let map = terrace_map(k, &lj, Some(&prof), t, kt, scale)?;
+        PairTerraces::new(lj, map)
+            .map_err(|e| SceneError::invalid(format!("pair[{k}].terraces"), e.to_string()))
+    }
+
+    fn estimator(
+        scene: &Scene,
+        lengths: DVec3,
+        tables: &[PairTable<LennardJones>],
+    ) -> Result<Option<Box<dyn Evaluate>>, SceneError> {
+        estimator(scene, lengths, tables)
+    }
+
+    fn model(
+        scene: &Scene,
+        base: &Path,
+        config: &Configuration,
+        tables: Vec<PairTable<LennardJones>>,
+        omegas: Option<&[DVec3]>,
+    ) -> Result<Terraced<LennardJones>, SceneError> {
+        rods_model(scene, base, config, tables, omegas)
+    }
+
+    fn smd(&self, (r_l, r_u): (f64, f64)) -> Result<Smoothed<LennardJones>, SceneError> {
+        Smoothed::new(self.potential(0)?, r_l, r_u)
+            .map_err(|e| SceneError::invalid("smd.smoothing", e.to_string()))
+    }
+}

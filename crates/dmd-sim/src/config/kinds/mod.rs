@@ -1,0 +1,212 @@
+//! The kinds of smooth pair potential a scene can name (`pair.potential.kind`), as plug-ins.
+//!
+//! The keys of each kind are a struct in [`scene`](crate::config::scene), listed by
+//! [`PotentialSpec`]. Each kind has one module here with its
+//! [`Describe`] implementation (checks, energy and length scales, drawing) and its [`Kind`]
+//! implementation: the terraces the event-driven engine builds on it and the force field the
+//! standard-MD engine integrates (and its potential, when the `potential` crate does not have
+//! it). [`PotentialSpec::describe`] and [`PotentialSpec::visit`] are the only places in the
+//! program that branch on the kind. Hot paths stay statically dispatched: a [`Visit`]or is
+//! generic over the kind, so each engine is compiled once per kind.
+//!
+//! Adding a kind takes three files: its keys in `scene` (a struct, a [`PotentialSpec`]
+//! variant and its arm in `describe`), its module here, and its arm in
+//! [`PotentialSpec::visit`].
+
+mod gay_berne;
+mod lennard_jones;
+mod lj_rods;
+mod ssd_e;
+mod stockmayer;
+
+use std::any::Any;
+use std::fmt::Debug;
+use std::path::Path;
+
+use crate::analysis::smooth::Evaluate;
+use crate::config::init::Configuration;
+use crate::config::scene::{Describe, PotentialSpec, Scene, SceneError, TerraceSpec};
+use crate::models::terraced::{PairTable, PairTerraces, Terraced, TerracedPotential};
+use glam::DVec3;
+
+pub use stockmayer::Stockmayer;
+
+impl PotentialSpec {
+    /// Hands the kind, as a type, to `v`: the engines' generic code is compiled per kind.
+    /// Rods with `ζ = 0` are Lennard-Jones spheres and run as those.
+    pub fn visit<V: Visit>(&self, v: V) -> V::Out {
+        match self {
+            PotentialSpec::Rods(k) if k.zeta == 0.0 => v.visit(&k.as_spheres()),
+            PotentialSpec::Rods(k) => v.visit(k),
+            PotentialSpec::LennardJones(k) => v.visit(k),
+            PotentialSpec::GayBerne(k) => v.visit(k),
+            PotentialSpec::SsdE(k) => v.visit(k),
+            PotentialSpec::Stockmayer(k) => v.visit(k),
+        }
+    }
+}
+
+/// A kind, as a type: what each engine builds from it (scene in internal units).
+pub trait Kind: Describe + Copy + 'static {
+    /// The model name in the event-driven engine's summary.
+    const MODEL: &'static str;
+    /// What the event-driven engine terraces.
+    type Terraced: TerracedPotential + Clone + Debug + Send + 'static;
+    /// What the standard-MD engine integrates.
+    type Smd: smd::Interaction;
+
+    /// The kind's keys from a pair table of the same kind (`None` for another kind).
+    fn select(spec: &PotentialSpec) -> Option<Self>;
+
+    /// Radial steps for isotropic potentials (run as stepped spheres, with analytic event
+    /// times), from pair table `k`'s terraces `t`; `None` for the others.
+    ///
+    /// # Errors
+    /// [`SceneError::Invalid`] naming the pair table.
+    fn radial_steps(
+        &self,
+        k: usize,
+        t: &TerraceSpec,
+        kt: f64,
+        scale: f64,
+    ) -> Option<Result<Vec<[f64; 2]>, SceneError>> {
+        let _ = (k, t, kt, scale);
+        None
+    }
+
+    /// The terraces of pair table `k` (`t`, at temperature `kt`; `scale` converts energies
+    /// in messages back to the scene's units).
+    ///
+    /// # Errors
+    /// [`SceneError::Invalid`] naming the pair table.
+    fn terraces(
+        &self,
+        k: usize,
+        t: &TerraceSpec,
+        kt: f64,
+        scale: f64,
+    ) -> Result<PairTerraces<Self::Terraced>, SceneError>;
+
+    /// The estimators of the continuous model along a run ([`Evaluate`]), or `None`.
+    ///
+    /// # Errors
+    /// [`SceneError::Invalid`] naming `output.smooth_estimators` or `smd.smoothing`.
+    fn estimator(
+        scene: &Scene,
+        lengths: DVec3,
+        tables: &[PairTable<Self::Terraced>],
+    ) -> Result<Option<Box<dyn Evaluate>>, SceneError>;
+
+    /// The terraced model: bodies' orientations and angular velocities from the scene (or a
+    /// start file's `omegas`, lab frame).
+    ///
+    /// # Errors
+    /// [`SceneError::Invalid`] naming the key that fails.
+    fn model(
+        scene: &Scene,
+        base: &Path,
+        config: &Configuration,
+        tables: Vec<PairTable<Self::Terraced>>,
+        omegas: Option<&[DVec3]>,
+    ) -> Result<Terraced<Self::Terraced>, SceneError>;
+
+    /// The standard-MD force field, smoothed over `window = (r_l, r_u)` (or its own cut-off).
+    ///
+    /// # Errors
+    /// [`SceneError::Invalid`] naming `pair[0].potential` or `smd.smoothing`.
+    fn smd(&self, window: (f64, f64)) -> Result<Self::Smd, SceneError>;
+}
+
+/// Code generic over the kind, run by [`PotentialSpec::visit`].
+pub trait Visit {
+    /// What it returns.
+    type Out;
+    /// Runs on kind `K` (the first pair table's keys).
+    fn visit<K: Kind>(self, kind: &K) -> Self::Out;
+}
+
+/// The terraced pair tables of a scene, built for one kind; the type is the kind's, erased
+/// until the engine is built ([`TerracedPlan::take`]).
+pub struct TerracedPlan {
+    /// The first pair table's potential: its kind picks the engine's type.
+    pub spec: PotentialSpec,
+    /// `Vec<PairTable<K::Terraced>>`.
+    tables: Box<dyn Any + Send>,
+    /// The interaction reach (the largest of all pairs).
+    pub reach: f64,
+    /// The model name in the summary.
+    pub model_name: &'static str,
+}
+
+impl TerracedPlan {
+    /// The tables of kind `K`.
+    ///
+    /// # Panics
+    /// If the plan was built for another kind (visit it with its own `spec`).
+    pub fn take<K: Kind>(self) -> Vec<PairTable<K::Terraced>> {
+        *self
+            .tables
+            .downcast::<Vec<PairTable<K::Terraced>>>()
+            .expect("a terraced plan is taken by the kind that built it")
+    }
+}
+
+/// What [`plan`] builds: radial steps (isotropic kinds) or terraced tables.
+pub enum Built {
+    /// `((species a, species b), steps)` per pair table.
+    Radial(Vec<crate::engine::potential::PairTable>),
+    /// Terraced tables.
+    Terraced(TerracedPlan),
+}
+
+/// Builds the tables of a scene whose pairs have smooth potentials (internal units).
+///
+/// # Errors
+/// [`SceneError::Invalid`] naming the pair table whose potential or terraces fail.
+pub fn plan(scene: &Scene, first: PotentialSpec) -> Result<Built, SceneError> {
+    struct Build<'a> {
+        scene: &'a Scene,
+        first: PotentialSpec,
+    }
+    impl Visit for Build<'_> {
+        type Out = Result<Built, SceneError>;
+        fn visit<K: Kind>(self, _: &K) -> Self::Out {
+            let scene = self.scene;
+            let scale = crate::config::units::Units::of(scene.units).energy;
+            let kt = scene.init.temperature;
+            let index = |n: &str| {
+                scene
+                    .species
+                    .iter()
+                    .position(|s| s.name == n)
+                    .expect("checked")
+            };
+            let mut radial = Vec::new();
+            let mut tables: Vec<PairTable<K::Terraced>> = Vec::new();
+            for (k, p) in scene.pair.iter().enumerate() {
+                let kind = p
+                    .potential
+                    .as_ref()
+                    .and_then(K::select)
+                    .expect("checked: one kind per scene");
+                let t = p.terraces.as_ref().expect("checked");
+                let pair = (index(&p.species[0]), index(&p.species[1]));
+                match kind.radial_steps(k, t, kt, scale) {
+                    Some(steps) => radial.push((pair, steps?)),
+                    None => tables.push((pair, kind.terraces(k, t, kt, scale)?)),
+                }
+            }
+            if !radial.is_empty() {
+                return Ok(Built::Radial(radial));
+            }
+            let reach = tables.iter().map(|(_, p)| p.reach()).fold(0.0, f64::max);
+            Ok(Built::Terraced(TerracedPlan {
+                spec: self.first,
+                tables: Box::new(tables),
+                reach,
+                model_name: K::MODEL,
+            }))
+        }
+    }
+    first.visit(Build { scene, first })
+}
