@@ -289,6 +289,25 @@ fn only_config_reads_toml() {
     );
 }
 
+/// The kinds of smooth potential are plug-ins: only `scene` (the keys and `describe`) and the
+/// kinds' own modules (`visit`, each kind's `select`) name a `PotentialSpec` variant, so a new
+/// kind changes nothing else.
+#[test]
+fn only_the_kinds_branch_on_the_kind_of_potential() {
+    let mut wrong = Vec::new();
+    for (m, file) in modules(&src_dir()) {
+        let text = std::fs::read_to_string(&file).expect("readable");
+        let own = m == ["config", "scene"] || m.starts_with(&["config".into(), "kinds".into()]);
+        if !own && library_part(&text).contains("PotentialSpec::") {
+            wrong.push(show(&m));
+        }
+    }
+    assert!(
+        wrong.is_empty(),
+        "modules outside config::scene and config::kinds naming a kind: {wrong:?}"
+    );
+}
+
 #[test]
 fn the_checks_see_the_edges_they_judge() {
     // The parser itself: use lists, nested groups, inline paths and doc links.
