@@ -664,10 +664,8 @@ fn ensemble_start(
         file,
     };
     // Every point is set up before anything is written (as `dmd run` does).
-    py.detach(|| {
-        dmd_sim::run::check_setup(&scene, &source.base, &source.text, &source.overrides)
-    })
-    .map_err(to_py)?;
+    py.detach(|| dmd_sim::run::check_setup(&scene, &source.base, &source.text, &source.overrides))
+        .map_err(to_py)?;
     dmd_sim::outdir::prepare(&out, force).map_err(|e| RunError::new_err(e.to_string()))?;
     let jobs = dmd_sim::chains::start_ensemble(&scene, &source, &out, every).map_err(to_py)?;
     Ok(jobs

@@ -281,7 +281,9 @@ pub fn resume_ensemble(
     done: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Ensemble, RunError> {
     let r = read_ensemble(out)?;
-    run_jobs(&r.scene, &r.source, out, threads, r.every, true, false, done)
+    run_jobs(
+        &r.scene, &r.source, out, threads, r.every, true, false, done,
+    )
 }
 
 /// How [`run_or_resume_job`] found a job.
@@ -380,10 +382,7 @@ pub fn read_ensemble(out: &Path) -> Result<Recorded, RunError> {
 ///
 /// # Errors
 /// [`RunError::Job`] naming the job (an unknown `k` included), or the record's error.
-pub fn run_or_resume_job(
-    out: &Path,
-    k: usize,
-) -> Result<(serde_json::Value, JobStart), RunError> {
+pub fn run_or_resume_job(out: &Path, k: usize) -> Result<(serde_json::Value, JobStart), RunError> {
     let r = read_ensemble(out)?;
     let Some(j) = r.jobs.get(k) else {
         return Err(RunError::Job {
