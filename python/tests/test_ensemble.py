@@ -13,10 +13,9 @@ import pytest
 
 import dmdsim
 
-distributed = pytest.importorskip(
-    "distributed", reason="dmdsim.run_ensemble needs dask and distributed (pip install dask distributed)"
-)
-pytest.importorskip("dask", reason="dmdsim.run_ensemble needs dask (pip install dask distributed)")
+SKIP = "dmdsim.run_ensemble needs dask and distributed (pip install dask distributed)"
+distributed = pytest.importorskip("distributed", reason=SKIP)
+pytest.importorskip("dask", reason=SKIP)
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -54,8 +53,18 @@ def assert_same_aggregate(a: Path, b: Path):
     assert (a / "ensemble.csv").read_bytes() == (b / "ensemble.csv").read_bytes()
 
 
+def job_events():
+    """Events that make a job last about a second on this build and machine (a
+    dev build runs ~2.5·10⁵ events/s here, a release build several times more), so that a
+    worker can be caught in the middle of a job: the engine's own rate on a short job."""
+    probe = square_well(events=20_000)
+    del probe["chains"], probe["sweep"]
+    rate = dmdsim.run(probe)["events_per_second"]
+    return int(min(max(rate, 150_000), 3_000_000))
+
+
 def test_a_killed_worker_s_job_resumes_and_the_aggregate_is_dmd_run_s(tmp_path):
-    scene = square_well(events=150_000)
+    scene = square_well(events=job_events())
     reference = tmp_path / "reference"
     expected = dmdsim.run(scene, out=reference)
     jobs = expected["jobs"]
