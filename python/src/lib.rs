@@ -3,7 +3,9 @@
 //! `Simulation` holds the event loop of a scene (built by `dmd_sim::run::build_simulation`
 //! exactly as `dmd run` starts it) behind an object-safe `Engine`, so one Python class
 //! serves every model and queue. `run_json` runs a whole scene as `dmd run` does and returns
-//! its summary as JSON. The engine runs with the GIL released; every 16384 events it takes the
+//! its summary as JSON. `ensemble_start`, `ensemble_job` and `ensemble_aggregate` are the
+//! steps of an ensemble whose jobs run as tasks of a Dask cluster (`dmdsim/ensemble.py`), each
+//! `dmd_sim::chains`'s own code. The engine runs with the GIL released; every 16384 events it takes the
 //! GIL back briefly (at most every 0.1 s) to look for a signal, and a `KeyboardInterrupt` raises
 //! the cancel flag of the loop, which stops between two events. The pure-Python half
 //! (`dmdsim/__init__.py`) reads scene files, dicts and text, and turns JSON into dicts.
