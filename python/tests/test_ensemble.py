@@ -158,3 +158,29 @@ def test_a_scene_without_chains_or_sweep_is_refused(tmp_path):
     with pytest.raises(dmdsim.SceneError, match=r"\[chains\] or \[sweep\]"):
         dmdsim.run_ensemble(scene, tmp_path / "out")
     assert not (tmp_path / "out").exists()
+
+
+def test_resume_ensemble_reads_back_finished_jobs_and_runs_the_rest(tmp_path):
+    scene = square_well(events=10_000)
+    out = tmp_path / "dask"
+    text = dmdsim._dmdsim.dict_to_toml(scene)
+    jobs = dmdsim._dmdsim.ensemble_start(text, [], str(tmp_path), "", str(out))
+    assert jobs == ["point-0/chain-0", "point-0/chain-1", "point-1/chain-0", "point-1/chain-1"]
+    # One job done before the client went away; nothing else ran.
+    _, start = dmdsim._dmdsim.ensemble_job(str(out), 2)
+    assert start == "fresh"
+    # A cluster object as the client (threads: the jobs hold no GIL while they run).
+    cluster = distributed.LocalCluster(
+        n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None
+    )
+    try:
+        aggregate = dmdsim.resume_ensemble(out, client=cluster)
+        with distributed.Client(cluster) as client:
+            events = [e for _, e in client.get_events(dmdsim.ensemble.EVENT_TOPIC)]
+    finally:
+        cluster.close()
+    starts = {e["job"]: e["start"] for e in events}
+    assert starts == {j: "finished" if k == 2 else "fresh" for k, j in enumerate(jobs)}
+    expected = dmdsim.run(scene, out=tmp_path / "reference")
+    assert aggregate == expected
+    assert_same_aggregate(out, tmp_path / "reference")
