@@ -377,8 +377,8 @@ pub fn read_ensemble(out: &Path) -> Result<Recorded, RunError> {
 /// `summary.json` is read back, an interrupted one continues from its checkpoint (bit for bit),
 /// one never started runs. Returns its summary (as `summary.json`) and how it was found.
 ///
-/// Two processes running the same job at once (a worker thought lost that is still running)
-/// compute the same bits and replace each other's files whole.
+/// One process at a time may run a job: two would write the same files (their temporary
+/// names included).
 ///
 /// # Errors
 /// [`RunError::Job`] naming the job (an unknown `k` included), or the record's error.
