@@ -12,6 +12,9 @@ overrides as ``dmd run --set`` takes them::
 
     summary = dmdsim.run("scenes/rods-paper.toml", out="out/rods", set=["run.time=2"])
 
+    # the jobs of [chains] and [sweep] as tasks on a Dask cluster (a LocalCluster by default)
+    aggregate = dmdsim.run_ensemble("sweep.toml", out="out/sweep", client="tcp://head:8786")
+
 Numbers are in the scene's units (reduced, or Å, ps, kJ/mol, K and bar in molecular units).
 Errors of the engine are raised as :class:`SceneError`, :class:`RunError` and
 :class:`CheckpointError` (all :class:`DmdError`) with the ``dmd`` command's messages.
@@ -40,6 +43,8 @@ __all__ = [
     "read_observables",
     "resume",
     "run",
+    "resume_ensemble",
+    "run_ensemble",
 ]
 
 __version__ = "0.1.0"
@@ -158,3 +163,40 @@ def read_observables(out: Union[str, "os.PathLike[str]"]) -> Dict[str, Dict[str,
         tables[path.stem] = {name: data[:, k].copy() for k, name in enumerate(header)}
     return tables
 
+
+def run_ensemble(
+    scene: SceneLike,
+    out: Union[str, "os.PathLike[str]"],
+    set: Overrides = None,
+    client: Any = None,
+    checkpoint_every: Optional[str] = "10m",
+    force: bool = False,
+) -> Dict[str, Any]:
+    """Runs the jobs of a scene's ``[chains]`` and ``[sweep]`` as tasks on a Dask cluster and
+    returns their aggregate (``ensemble.json``), equal to the one ``dmd run`` writes.
+
+    ``client`` is a ``distributed.Client``, a scheduler address (``"tcp://host:8786"``) or a
+    cluster object (``distributed.LocalCluster``, dask-jobqueue's ``SLURMCluster`` or
+    ``PBSCluster``); ``None`` starts a ``LocalCluster`` of one single-threaded worker process
+    per core for the call. Each job writes its own folder under ``out`` (which the workers must
+    see at the same path) with a checkpoint every ``checkpoint_every`` (``"10m"`` of wall time,
+    ``"1e6"`` events; ``None``: none). A job whose worker is lost is given to another worker by
+    Dask and continues from its last checkpoint, bit for bit. ``set`` and ``force`` are those
+    of :func:`run`. Needs the ``dask`` and ``distributed`` packages.
+    """
+    from . import ensemble
+
+    text, base, file = _source(scene)
+    return ensemble.run_ensemble(
+        text, _overrides(set), base, file, out, client, checkpoint_every, force
+    )
+
+
+def resume_ensemble(out: Union[str, "os.PathLike[str]"], client: Any = None) -> Dict[str, Any]:
+    """Finishes the ensemble in ``out`` (started by :func:`run_ensemble` or ``dmd run``) on a
+    Dask cluster and returns its aggregate: finished jobs are read back, interrupted ones
+    continue from their checkpoints, the others run. ``client`` as for :func:`run_ensemble`.
+    """
+    from . import ensemble
+
+    return ensemble.resume_ensemble(out, client)

@@ -101,3 +101,25 @@ def run_json(
 ) -> str: ...
 def dict_to_toml(scene: Dict[str, Any]) -> str: ...
 def read_scene(file: str) -> Tuple[str, str]: ...
+def ensemble_start(
+    text: str,
+    overrides: List[str],
+    base: str,
+    file: str,
+    out: str,
+    checkpoint_every: Optional[str] = None,
+    force: bool = False,
+) -> List[str]:
+    """Sets up every point of an ensemble scene (``[chains]``/``[sweep]``), prepares ``out``
+    as ``dmd run`` does and records the scene in ``out/ensemble-source.json``; returns the
+    jobs' folders (relative to ``out``) in job order. Nothing runs."""
+def ensemble_jobs(out: str) -> List[str]:
+    """The jobs' folders of the ensemble recorded in ``out``, in job order."""
+def ensemble_job(out: str, k: int) -> Tuple[str, str]:
+    """Runs job ``k`` of the ensemble recorded in ``out`` with the GIL released: a finished
+    job's ``summary.json`` is read back, an interrupted one continues from its checkpoint, one
+    never started runs. Returns its summary as JSON and ``"finished"``, ``"resumed"`` or
+    ``"fresh"``."""
+def ensemble_aggregate(out: str) -> str:
+    """Aggregates the jobs' ``summary.json`` of the ensemble in ``out`` into ``ensemble.json``
+    and ``ensemble.csv`` (``dmd run``'s code) and returns the aggregate as JSON."""

@@ -3,7 +3,9 @@
 //! `Simulation` holds the event loop of a scene (built by `dmd_sim::run::build_simulation`
 //! exactly as `dmd run` starts it) behind an object-safe `Engine`, so one Python class
 //! serves every model and queue. `run_json` runs a whole scene as `dmd run` does and returns
-//! its summary as JSON. The engine runs with the GIL released; every 16384 events it takes the
+//! its summary as JSON. `ensemble_start`, `ensemble_job` and `ensemble_aggregate` are the
+//! steps of an ensemble whose jobs run as tasks of a Dask cluster (`dmdsim/ensemble.py`), each
+//! `dmd_sim::chains`'s own code. The engine runs with the GIL released; every 16384 events it takes the
 //! GIL back briefly (at most every 0.1 s) to look for a signal, and a `KeyboardInterrupt` raises
 //! the cancel flag of the loop, which stops between two events. The pure-Python half
 //! (`dmdsim/__init__.py`) reads scene files, dicts and text, and turns JSON into dicts.
@@ -623,6 +625,90 @@ fn run_json(
     json(serde_json::to_string(&watch.finish(result)?))
 }
 
+/// Prepares `out` for the jobs of an ensemble scene as `dmd run` does before running them
+/// (every point set up, the folder prepared, the scene recorded) and returns the jobs' folders
+/// in job order; nothing runs.
+#[pyfunction]
+#[pyo3(signature = (text, overrides, base, file, out, checkpoint_every=None, force=false))]
+#[allow(clippy::too_many_arguments)]
+fn ensemble_start(
+    py: Python<'_>,
+    text: String,
+    overrides: Vec<String>,
+    base: PathBuf,
+    file: PathBuf,
+    out: PathBuf,
+    checkpoint_every: Option<String>,
+    force: bool,
+) -> PyResult<Vec<String>> {
+    let scene =
+        Scene::from_str_with(&text, &overrides).map_err(|e| SceneError::new_err(e.to_string()))?;
+    if scene.chains.is_none() && scene.sweep.is_none() {
+        return Err(SceneError::new_err(
+            "run_ensemble runs the jobs of [chains] or [sweep]; this scene has neither: run it \
+             with dmdsim.run",
+        ));
+    }
+    if scene.engine == EngineKind::Smd {
+        return Err(SceneError::new_err(
+            "run_ensemble runs scenes of the event-driven engine; this one has engine = \"smd\"",
+        ));
+    }
+    let every = checkpoint_every
+        .as_deref()
+        .map(checkpoint::Every::parse)
+        .transpose()
+        .map_err(|e| SceneError::new_err(format!("checkpoint_every: {e}")))?;
+    let source = SceneSource {
+        text,
+        overrides,
+        base,
+        file,
+    };
+    // Every point is set up before anything is written (as `dmd run` does).
+    py.detach(|| dmd_sim::run::check_setup(&scene, &source.base, &source.text, &source.overrides))
+        .map_err(to_py)?;
+    dmd_sim::outdir::prepare(&out, force).map_err(|e| RunError::new_err(e.to_string()))?;
+    let jobs = dmd_sim::chains::start_ensemble(&scene, &source, &out, every).map_err(to_py)?;
+    Ok(jobs
+        .iter()
+        .map(|j| j.dir.to_string_lossy().into_owned())
+        .collect())
+}
+
+/// The jobs' folders of the ensemble recorded in `out`, in job order.
+#[pyfunction]
+fn ensemble_jobs(out: PathBuf) -> PyResult<Vec<String>> {
+    let r = dmd_sim::chains::read_ensemble(&out).map_err(to_py)?;
+    Ok(r.jobs
+        .iter()
+        .map(|j| j.dir.to_string_lossy().into_owned())
+        .collect())
+}
+
+/// Runs, resumes or reads back job `k` of the ensemble recorded in `out` (GIL released);
+/// returns its summary as JSON and `"fresh"`, `"resumed"` or `"finished"`.
+#[pyfunction]
+fn ensemble_job(py: Python<'_>, out: PathBuf, k: usize) -> PyResult<(String, &'static str)> {
+    let (summary, start) = py
+        .detach(|| dmd_sim::chains::run_or_resume_job(&out, k))
+        .map_err(to_py)?;
+    let json = serde_json::to_string(&summary)
+        .map_err(|e| RunError::new_err(format!("the summary does not serialise: {e}")))?;
+    Ok((json, start.name()))
+}
+
+/// Aggregates the jobs' summaries of the ensemble in `out` into `ensemble.json` and
+/// `ensemble.csv` (as `dmd run` does) and returns the aggregate as JSON.
+#[pyfunction]
+fn ensemble_aggregate(py: Python<'_>, out: PathBuf) -> PyResult<String> {
+    let e = py
+        .detach(|| dmd_sim::chains::write_aggregate(&out))
+        .map_err(to_py)?;
+    serde_json::to_string(&e)
+        .map_err(|e| RunError::new_err(format!("the aggregate does not serialise: {e}")))
+}
+
 /// A Python value as TOML (dicts, lists, tuples, str, bool, int, float).
 fn to_toml(v: &Bound<'_, PyAny>, key: &str) -> PyResult<toml::Value> {
     let bad = || {
@@ -713,5 +799,9 @@ fn _dmdsim(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(run_json, m)?)?;
     m.add_function(wrap_pyfunction!(dict_to_toml, m)?)?;
     m.add_function(wrap_pyfunction!(read_scene, m)?)?;
+    m.add_function(wrap_pyfunction!(ensemble_start, m)?)?;
+    m.add_function(wrap_pyfunction!(ensemble_jobs, m)?)?;
+    m.add_function(wrap_pyfunction!(ensemble_job, m)?)?;
+    m.add_function(wrap_pyfunction!(ensemble_aggregate, m)?)?;
     Ok(())
 }

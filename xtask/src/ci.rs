@@ -44,10 +44,11 @@ pub(crate) const STEPS: &[Step] = &[
     ),
     ("tests", TEST_COMMAND, &[]),
     // The Python package (python/): built by pip through maturin in the dev profile (its
-    // crates are mostly built by the tests above), then its pytest suite.
+    // crates are mostly built by the tests above), then its pytest suite (Dask for its
+    // ensembles on a cluster).
     (
         "python package",
-        "python3 -m pip install --quiet --disable-pip-version-check ./python pytest",
+        "python3 -m pip install --quiet --disable-pip-version-check ./python pytest dask distributed",
         &[("MATURIN_PEP517_ARGS", "--profile dev")],
     ),
     ("python tests", "python3 -m pytest -q python/tests", &[]),

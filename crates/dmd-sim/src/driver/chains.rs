@@ -18,6 +18,12 @@
 //! so that [`resume_ensemble`] (`dmd resume DIR`) can finish an interrupted ensemble: finished
 //! jobs (those with a `summary.json`) are read back, interrupted ones resumed from their
 //! checkpoint, jobs never started are run; the aggregate is the one an uninterrupted run gives.
+//!
+//! The same steps serve a scheduler that runs the jobs elsewhere (the Python package's Dask
+//! ensembles): [`start_ensemble`] prepares the folder, [`run_or_resume_job`] runs, resumes or
+//! reads back job `k` of the recorded ensemble in any process that sees the folder, and
+//! [`write_aggregate`] aggregates the jobs' `summary.json` files with [`aggregate`], as
+//! `dmd run` does.
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -274,6 +280,77 @@ pub fn resume_ensemble(
     threads: Option<usize>,
     done: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Ensemble, RunError> {
+    let r = read_ensemble(out)?;
+    run_jobs(
+        &r.scene, &r.source, out, threads, r.every, true, false, done,
+    )
+}
+
+/// How [`run_or_resume_job`] found a job.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum JobStart {
+    /// Nothing saved: run from its start.
+    Fresh,
+    /// Interrupted: continued from its checkpoint.
+    Resumed,
+    /// Finished: its `summary.json` read back.
+    Finished,
+}
+
+impl JobStart {
+    /// `"fresh"`, `"resumed"` or `"finished"`.
+    pub fn name(self) -> &'static str {
+        match self {
+            JobStart::Fresh => "fresh",
+            JobStart::Resumed => "resumed",
+            JobStart::Finished => "finished",
+        }
+    }
+}
+
+/// An ensemble as recorded in its folder by [`start_ensemble`].
+#[derive(Clone, Debug)]
+pub struct Recorded {
+    /// The scene.
+    pub scene: Scene,
+    /// Its text, overrides and base folder.
+    pub source: SceneSource,
+    /// The jobs' checkpoint interval.
+    pub every: Option<Every>,
+    /// The jobs, in job order.
+    pub jobs: Vec<Job>,
+}
+
+/// Prepares `out` for the jobs of `scene` (creates it and records the scene and the checkpoint
+/// interval in [`SOURCE_FILE`]) without running any; returns the jobs in job order.
+///
+/// # Errors
+/// The [`SceneError`] of a point, or an output error.
+pub fn start_ensemble(
+    scene: &Scene,
+    source: &SceneSource,
+    out: &Path,
+    every: Option<Every>,
+) -> Result<Vec<Job>, RunError> {
+    let jobs = jobs(scene, &source.text, &source.overrides)?;
+    std::fs::create_dir_all(out).map_err(|e| OutputError {
+        path: out.to_owned(),
+        message: e.to_string(),
+    })?;
+    let record = EnsembleSource {
+        source: source.clone(),
+        every,
+    };
+    let json = serde_json::to_string_pretty(&record).expect("a record serialises");
+    write_atomically(&out.join(SOURCE_FILE), json.as_bytes())?;
+    Ok(jobs)
+}
+
+/// The ensemble recorded in `out` by [`start_ensemble`] (or `dmd run`).
+///
+/// # Errors
+/// A missing or unreadable [`SOURCE_FILE`], or a scene that no longer reads.
+pub fn read_ensemble(out: &Path) -> Result<Recorded, RunError> {
     let path = out.join(SOURCE_FILE);
     let bad = |m: String| -> RunError {
         checkpoint::CheckpointError {
@@ -287,7 +364,95 @@ pub fn resume_ensemble(
         serde_json::from_str(&text).map_err(|e| bad(format!("not an ensemble record: {e}")))?;
     let scene = Scene::from_str_with(&e.source.text, &e.source.overrides)
         .map_err(|x| bad(format!("its scene no longer reads: {x}")))?;
-    run_jobs(&scene, &e.source, out, threads, e.every, true, false, done)
+    let jobs = jobs(&scene, &e.source.text, &e.source.overrides)?;
+    Ok(Recorded {
+        scene,
+        source: e.source,
+        every: e.every,
+        jobs,
+    })
+}
+
+/// Job `k` of the ensemble recorded in `out`, whatever state its folder is in: a finished job's
+/// `summary.json` is read back, an interrupted one continues from its checkpoint (bit for bit),
+/// one never started runs. Returns its summary (as `summary.json`) and how it was found.
+///
+/// One process at a time may run a job: two would write the same files (their temporary
+/// names included).
+///
+/// # Errors
+/// [`RunError::Job`] naming the job (an unknown `k` included), or the record's error.
+pub fn run_or_resume_job(out: &Path, k: usize) -> Result<(serde_json::Value, JobStart), RunError> {
+    let r = read_ensemble(out)?;
+    let Some(j) = r.jobs.get(k) else {
+        return Err(RunError::Job {
+            job: format!("#{k}"),
+            source: Box::new(
+                OutputError {
+                    path: out.to_owned(),
+                    message: format!("the ensemble has {} jobs", r.jobs.len()),
+                }
+                .into(),
+            ),
+        });
+    };
+    let dir = out.join(&j.dir);
+    let start = if dir.join("summary.json").exists() {
+        JobStart::Finished
+    } else if dir.join(checkpoint::FILE_NAME).exists() {
+        JobStart::Resumed
+    } else {
+        JobStart::Fresh
+    };
+    run_job(j, &r.source, out, r.every, true, false)
+        .map(|v| (v, start))
+        .map_err(|e| RunError::Job {
+            job: j.dir.display().to_string(),
+            source: Box::new(e),
+        })
+}
+
+/// Aggregates the finished jobs of the ensemble recorded in `out` (their `summary.json`) and
+/// writes `ensemble.json` and `ensemble.csv`, as `dmd run` does after running them.
+///
+/// # Errors
+/// The record's error, or [`RunError::Job`] for a job without a readable summary.
+pub fn write_aggregate(out: &Path) -> Result<Ensemble, RunError> {
+    let r = read_ensemble(out)?;
+    let mut summaries = Vec::with_capacity(r.jobs.len());
+    for j in &r.jobs {
+        let path = out.join(&j.dir).join("summary.json");
+        let read = std::fs::read_to_string(&path)
+            .map_err(|e| e.to_string())
+            .and_then(|t| {
+                serde_json::from_str::<serde_json::Value>(&t)
+                    .map_err(|e| format!("not a summary: {e}"))
+            });
+        match read {
+            Ok(v) => summaries.push(v),
+            Err(message) => {
+                return Err(RunError::Job {
+                    job: j.dir.display().to_string(),
+                    source: Box::new(OutputError { path, message }.into()),
+                });
+            }
+        }
+    }
+    finish(&r.scene, &r.jobs, &summaries, out)
+}
+
+/// Aggregates `summaries` (in job order) and writes `ensemble.json` and `ensemble.csv`.
+fn finish(
+    scene: &Scene,
+    jobs: &[Job],
+    summaries: &[serde_json::Value],
+    out: &Path,
+) -> Result<Ensemble, RunError> {
+    let ensemble = aggregate(scene, jobs, summaries);
+    let json = serde_json::to_string_pretty(&ensemble).expect("an ensemble serialises");
+    write_atomically(&out.join("ensemble.json"), json.as_bytes())?;
+    write_table(&out.join("ensemble.csv"), &ensemble)?;
+    Ok(ensemble)
 }
 
 /// Runs (or, with `resume`, finishes) every job; `halt` stops each after its first
@@ -303,19 +468,11 @@ fn run_jobs(
     halt: bool,
     done: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Ensemble, RunError> {
-    let jobs = jobs(scene, &source.text, &source.overrides)?;
-    if !resume {
-        std::fs::create_dir_all(out).map_err(|e| OutputError {
-            path: out.to_owned(),
-            message: e.to_string(),
-        })?;
-        let record = EnsembleSource {
-            source: source.clone(),
-            every,
-        };
-        let json = serde_json::to_string_pretty(&record).expect("a record serialises");
-        write_atomically(&out.join(SOURCE_FILE), json.as_bytes())?;
-    }
+    let jobs = if resume {
+        jobs(scene, &source.text, &source.overrides)?
+    } else {
+        start_ensemble(scene, source, out, every)?
+    };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads.unwrap_or(0))
         .build()
@@ -346,11 +503,7 @@ fn run_jobs(
             }
         }
     }
-    let ensemble = aggregate(scene, &jobs, &summaries);
-    let json = serde_json::to_string_pretty(&ensemble).expect("an ensemble serialises");
-    write_atomically(&out.join("ensemble.json"), json.as_bytes())?;
-    write_table(&out.join("ensemble.csv"), &ensemble)?;
-    Ok(ensemble)
+    finish(scene, &jobs, &summaries, out)
 }
 
 /// One job: with `resume`, a finished job's `summary.json` is read back and an interrupted

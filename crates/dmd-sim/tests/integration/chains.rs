@@ -150,3 +150,42 @@ fn an_interrupted_ensemble_is_finished_by_resume() {
     let _ = std::fs::remove_dir_all(straight);
     let _ = std::fs::remove_dir_all(crashed);
 }
+
+#[test]
+fn jobs_run_one_by_one_give_the_aggregate_of_run_ensemble() {
+    use dmd_sim::chains::{JobStart, run_or_resume_job, start_ensemble, write_aggregate};
+    let set = vec!["hmc.segments=20".to_owned()];
+    let scene = Scene::from_str_with(SCENE, &set).unwrap();
+    let src = SceneSource {
+        overrides: set,
+        ..source()
+    };
+    let together = dir("together");
+    let a = run_ensemble(&scene, &src, &together, Some(2), None, &|_, _| {}).unwrap();
+    // As a scheduler elsewhere runs them: the folder prepared, then each job on its own, in
+    // any order, then the aggregate of the summaries on disk.
+    let apart = dir("apart");
+    let jobs = start_ensemble(&scene, &src, &apart, None).unwrap();
+    for k in (0..jobs.len()).rev() {
+        let (_, start) = run_or_resume_job(&apart, k).unwrap();
+        assert_eq!(start, JobStart::Fresh);
+    }
+    let (summary, start) = run_or_resume_job(&apart, 3).unwrap();
+    assert_eq!(start, JobStart::Finished, "a finished job is read back");
+    assert_eq!(summary["hmc"]["acceptance_rate"].as_f64(), Some(1.0));
+    let e = run_or_resume_job(&apart, jobs.len())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("the ensemble has 8 jobs"), "{e}");
+    let b = write_aggregate(&apart).unwrap();
+    assert_eq!(a, b);
+    for file in ["ensemble.json", "ensemble.csv"] {
+        assert_eq!(
+            std::fs::read(together.join(file)).unwrap(),
+            std::fs::read(apart.join(file)).unwrap(),
+            "{file}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(together);
+    let _ = std::fs::remove_dir_all(apart);
+}
