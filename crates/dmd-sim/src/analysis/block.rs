@@ -13,13 +13,36 @@ pub struct BlockEstimate {
     pub blocks: u64,
     /// Samples.
     pub samples: u64,
+    /// Whether the blocked errors reached their plateau ([`plateau`]); if not, the series is
+    /// too short for its correlation time and `error` is a lower bound.
+    #[serde(default = "yes")]
+    pub converged: bool,
+}
+
+fn yes() -> bool {
+    true
+}
+
+/// Whether blocked errors (`(error, blocks)` per level, block length doubling, levels with at
+/// least 16 blocks) have reached their plateau: the last level's error exceeds neither of the
+/// two before it by more than twice its own relative uncertainty `1/√(2(blocks − 1))`. While
+/// the blocks are shorter than the correlation time each doubling raises the error by up to
+/// √2, two by up to 2 (against 37 % allowed with 16 blocks), so a curve still rising at its end
+/// fails. Fewer than three levels cannot show a plateau.
+pub fn plateau(levels: &[(f64, u64)]) -> bool {
+    let [.., (two_before, _), (before, _), (last, blocks)] = levels else {
+        return false;
+    };
+    let allowed = 1.0 + 2.0 / (2.0 * (*blocks as f64 - 1.0)).sqrt();
+    *last <= *before * allowed && *last <= *two_before * allowed
 }
 
 /// Mean and standard error of a correlated series by blocking (Flyvbjerg & Petersen, J. Chem.
 /// Phys. 91, 461, 1989): the series is halved into blocks of 1, 2, 4, … samples; the naive error
 /// of the block means grows with the block length until the blocks are longer than the
 /// correlation time, then stays flat. The largest error over the levels with at least 16
-/// blocks is returned (conservative; its own relative uncertainty is about `1/√(2·blocks)`).
+/// blocks is returned (conservative; its own relative uncertainty is about `1/√(2·blocks)`),
+/// with whether the curve reached its plateau ([`plateau`]).
 pub fn block_average(x: &[f64]) -> BlockEstimate {
     let n = x.len();
     let mean = if n > 0 {
@@ -27,23 +50,32 @@ pub fn block_average(x: &[f64]) -> BlockEstimate {
     } else {
         f64::NAN
     };
-    let mut best = (f64::NAN, 0u64);
+    let mut levels = Vec::new();
     let mut level: Vec<f64> = x.to_vec();
     while level.len() >= 16 {
         let m = level.len() as f64;
         let mu = level.iter().sum::<f64>() / m;
         let var = level.iter().map(|v| (v - mu) * (v - mu)).sum::<f64>() / (m - 1.0);
-        let err = (var / m).sqrt();
-        if best.0.is_nan() || err > best.0 {
-            best = (err, level.len() as u64);
-        }
+        levels.push(((var / m).sqrt(), level.len() as u64));
         level = level.chunks_exact(2).map(|c| 0.5 * (c[0] + c[1])).collect();
+    }
+    estimate_of(mean, &levels, n as u64)
+}
+
+/// The largest error over the levels, and whether they reached their plateau.
+fn estimate_of(mean: f64, levels: &[(f64, u64)], samples: u64) -> BlockEstimate {
+    let mut best = (f64::NAN, 0u64);
+    for &(err, blocks) in levels {
+        if best.0.is_nan() || err > best.0 {
+            best = (err, blocks);
+        }
     }
     BlockEstimate {
         mean,
         error: best.0,
         blocks: best.1,
-        samples: n as u64,
+        samples,
+        converged: plateau(levels),
     }
 }
 
@@ -106,20 +138,17 @@ impl Blocks {
     /// Mean of every value pushed and its standard error by the rule of [`block_average`]
     /// (the largest over the levels with at least 16 blocks; NaN with fewer than 16 values).
     pub fn estimate(&self) -> BlockEstimate {
-        let mut best = (f64::NAN, 0u64);
-        for l in self.levels.iter().filter(|l| l.count >= 16) {
-            let m = l.count as f64;
-            let err = (l.m2 / (m - 1.0) / m).sqrt();
-            if best.0.is_nan() || err > best.0 {
-                best = (err, l.count);
-            }
-        }
-        BlockEstimate {
-            mean: self.levels.first().map_or(f64::NAN, |l| l.mean),
-            error: best.0,
-            blocks: best.1,
-            samples: self.len(),
-        }
+        let levels: Vec<(f64, u64)> = self
+            .levels
+            .iter()
+            .filter(|l| l.count >= 16)
+            .map(|l| {
+                let m = l.count as f64;
+                ((l.m2 / (m - 1.0) / m).sqrt(), l.count)
+            })
+            .collect();
+        let mean = self.levels.first().map_or(f64::NAN, |l| l.mean);
+        estimate_of(mean, &levels, self.len())
     }
 }
 
@@ -197,6 +226,29 @@ mod tests {
         assert!((scatter / exact - 1.0).abs() < 0.2, "{scatter} vs {exact}");
     }
 
+    /// Long series of short correlation reach the plateau; series shorter than a few
+    /// correlation times do not, and say so.
+    #[test]
+    fn the_plateau_is_found_when_the_series_is_long_enough_and_only_then() {
+        let converged = |phi: f64, n: usize| {
+            (0..40)
+                .filter(|&seed| block_average(&ar1(phi, n, 500 + seed)).converged)
+                .count()
+        };
+        // τ ≈ 10 samples, 2^16 samples: nearly always a plateau.
+        assert!(converged(0.9, 1 << 16) >= 34, "{}", converged(0.9, 1 << 16));
+        // τ ≈ 2000 samples, 2^12 samples (two correlation times): almost never.
+        assert!(
+            converged(0.9995, 1 << 12) <= 6,
+            "{}",
+            converged(0.9995, 1 << 12)
+        );
+        assert!(!plateau(&[(1.0, 64), (1.0, 32)]));
+        assert!(plateau(&[(1.0, 64), (1.0, 32), (1.0, 16)]));
+        assert!(!plateau(&[(1.0, 64), (1.0, 32), (1.41, 16)]));
+        assert!(!plateau(&[(1.0, 64), (1.3, 32), (1.41, 16)]));
+    }
+
     #[test]
     fn online_blocks_agree_with_block_average() {
         for n in [0, 1, 15, 16, 17, 100, 1000, 4097] {
@@ -206,7 +258,11 @@ mod tests {
                 b.push(v);
             }
             let (a, o) = (block_average(&x), b.estimate());
-            assert_eq!((a.blocks, a.samples), (o.blocks, o.samples), "n = {n}");
+            assert_eq!(
+                (a.blocks, a.samples, a.converged),
+                (o.blocks, o.samples, o.converged),
+                "n = {n}"
+            );
             if n == 0 {
                 assert!(o.mean.is_nan() && o.error.is_nan());
                 continue;

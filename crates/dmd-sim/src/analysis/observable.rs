@@ -285,7 +285,7 @@ pub struct Correlations {
 
 /// The diffusion coefficients of a run ([`Correlations::diffusions`]), each with its
 /// block-average error (length²/time).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct Diffusions {
     /// From the slope of the MSD.
     pub msd: Option<f64>,
@@ -295,6 +295,8 @@ pub struct Diffusions {
     pub vacf: Option<f64>,
     /// The error of `vacf`.
     pub vacf_error: Option<f64>,
+    /// The summary keys of those errors whose blocking found no plateau (lower bounds).
+    pub without_plateau: Vec<&'static str>,
 }
 
 impl Correlations {
@@ -528,11 +530,19 @@ impl Correlations {
     pub fn diffusions(correlations: Option<&Self>) -> Diffusions {
         let msd = correlations.filter(|c| c.wants_msd());
         let vacf = correlations.filter(|c| c.wants_vacf());
+        let mut without_plateau = Vec::new();
+        if msd.is_some_and(|c| !c.d_msd_blocks.estimate().converged) {
+            without_plateau.push("diffusion_msd_error");
+        }
+        if vacf.is_some_and(|c| !c.d_vacf_blocks.estimate().converged) {
+            without_plateau.push("diffusion_vacf_error");
+        }
         Diffusions {
             msd: msd.and_then(Self::diffusion_from_msd),
             msd_error: msd.and_then(Self::diffusion_from_msd_error),
             vacf: vacf.and_then(Self::diffusion_from_vacf),
             vacf_error: vacf.and_then(Self::diffusion_from_vacf_error),
+            without_plateau,
         }
     }
 

@@ -273,6 +273,38 @@ pub struct SampleSummary {
     pub pressure_smooth: Option<BlockEstimate>,
 }
 
+impl SampleSummary {
+    /// The summary keys of the errors whose blocking found no plateau: the run is shorter than
+    /// a few correlation times of that quantity, and its error is a lower bound.
+    pub fn without_plateau(&self) -> Vec<&'static str> {
+        [
+            (Some(&self.temperature), "temperature_error"),
+            (
+                Some(&self.translational_temperature),
+                "translational_temperature_error",
+            ),
+            (
+                self.rotational_temperature.as_ref(),
+                "rotational_temperature_error",
+            ),
+            (
+                Some(&self.potential_per_body),
+                "potential_energy_per_body_error",
+            ),
+            (Some(&self.pressure), "pressure_error"),
+            (
+                self.potential_smooth_per_body.as_ref(),
+                "potential_energy_per_body_smooth_error",
+            ),
+            (self.pressure_smooth.as_ref(), "pressure_smooth_error"),
+        ]
+        .into_iter()
+        .filter(|(b, _)| b.is_some_and(|b| !b.converged))
+        .map(|(_, key)| key)
+        .collect()
+    }
+}
+
 impl Samples {
     /// Records the sample `view`, with the smooth sums of the estimator if there is one.
     pub fn sample(&mut self, view: &View<'_>, smooth: Option<SmoothSums>) {

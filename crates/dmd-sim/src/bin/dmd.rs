@@ -604,6 +604,7 @@ fn print_summary(s: &Summary, out: &Path, terminal: Option<&Terminal>) {
         (s.diffusion_vacf, s.diffusion_vacf_error),
         u,
     );
+    print_without_plateau(&s.errors_without_plateau);
     if let Some(h) = &s.hmc {
         line(
             "hmc",
@@ -707,6 +708,16 @@ fn print_diffusion(
     }
     if !d.is_empty() {
         list("diffusion", &d);
+    }
+}
+
+/// The error bars whose blocking found no plateau: the run is shorter than a few correlation
+/// times of those quantities, so their errors are lower bounds.
+fn print_without_plateau(keys: &[String]) {
+    if !keys.is_empty() {
+        let mut items = keys.to_vec();
+        items[0] = format!("lower bounds, run longer: {}", items[0]);
+        list("no plateau", &items);
     }
 }
 
@@ -815,6 +826,7 @@ fn print_smd_summary(s: &SmdSummary, out: &Path, terminal: Option<&Terminal>) {
         (s.diffusion_vacf, s.diffusion_vacf_error),
         u,
     );
+    print_without_plateau(&s.errors_without_plateau);
     if !s.ignored_keys.is_empty() {
         let mut keys = vec![format!(
             "ignored (event-driven only): {}",

@@ -419,6 +419,7 @@ impl Chain {
                 error: b.error / n,
                 blocks: b.blocks,
                 samples: finite.len() as u64,
+                converged: b.converged,
             }
         };
         let range = self.settings.histogram_range * self.settings.temperature;

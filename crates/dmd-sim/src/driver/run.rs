@@ -218,6 +218,10 @@ pub struct Summary {
     pub diffusion_vacf: Option<f64>,
     /// Its error, as `diffusion_msd_error`.
     pub diffusion_vacf_error: Option<f64>,
+    /// The `_error` keys whose blocking found no plateau (`block::plateau`): the run is
+    /// shorter than a few correlation times of those quantities, and their errors are lower
+    /// bounds; run longer.
+    pub errors_without_plateau: Vec<String>,
     /// The seed.
     pub seed: u64,
     /// Files written besides `summary.json`.
@@ -1345,6 +1349,13 @@ impl Context<'_> {
             diffusion_vacf: diffusion.vacf,
             diffusion_msd_error: diffusion.msd_error,
             diffusion_vacf_error: diffusion.vacf_error,
+            errors_without_plateau: sampled
+                .map(|s| s.without_plateau())
+                .unwrap_or_default()
+                .into_iter()
+                .chain(diffusion.without_plateau.iter().copied())
+                .map(str::to_owned)
+                .collect(),
             seed: scene.seed,
             files: Vec::new(),
             hmc: run

@@ -160,6 +160,8 @@ pub struct SmdSummary {
     pub diffusion_vacf: Option<f64>,
     /// Its error, as `diffusion_msd_error`.
     pub diffusion_vacf_error: Option<f64>,
+    /// The `_error` keys whose blocking found no plateau, as the event-driven engine's.
+    pub errors_without_plateau: Vec<String>,
     /// The seed.
     pub seed: u64,
     /// Scene keys this engine ignored (they belong to the event-driven engine).
@@ -625,23 +627,29 @@ impl Job<'_> {
         let u = self.units;
         let sm = smd::observe::Summary::of(&bridge.rows, n);
         // The errors by the event-driven engine's blocking, so that the engines' error bars
-        // mean the same.
-        let blocked = |f: fn(&smd::observe::SeriesRow) -> f64| {
-            crate::analysis::block::block_average(&bridge.rows.iter().map(f).collect::<Vec<_>>())
-                .error
+        // mean the same; the keys of those without a plateau are listed.
+        let mut without_plateau: Vec<String> = Vec::new();
+        let mut blocked_by = |key: &str, x: Vec<f64>| {
+            let b = crate::analysis::block::block_average(&x);
+            if !b.converged {
+                without_plateau.push(key.to_owned());
+            }
+            b.error
         };
         let nb = n as f64;
-        let potential_error = u.energy_out(
-            crate::analysis::block::block_average(
-                &bridge
-                    .rows
-                    .iter()
-                    .map(|r| r.potential / nb)
-                    .collect::<Vec<_>>(),
-            )
-            .error,
+        let column = |f: fn(&smd::observe::SeriesRow) -> f64| -> Vec<f64> {
+            bridge.rows.iter().map(f).collect()
+        };
+        let temperature_error = blocked_by("temperature_error", column(|r| r.temperature));
+        let translational_error = blocked_by(
+            "translational_temperature_error",
+            column(|r| r.temperature_translational),
         );
-        let pressure_error = u.pressure_out(blocked(|r| r.pressure));
+        let potential_error = u.energy_out(blocked_by(
+            "potential_energy_per_body_error",
+            bridge.rows.iter().map(|r| r.potential / nb).collect(),
+        ));
+        let pressure_error = u.pressure_out(blocked_by("pressure_error", column(|r| r.pressure)));
         let s = md.system();
         let nf = n as f64;
         let volume = s.volume();
@@ -664,7 +672,7 @@ impl Job<'_> {
                 .iter()
                 .map(|r| (r.temperature * dof - r.temperature_translational * dof_t) / rot_dof)
                 .collect();
-            u.temperature_out(crate::analysis::block::block_average(&t_rot).error)
+            u.temperature_out(blocked_by("rotational_temperature_error", t_rot))
         });
         let mut observers = bridge.observers;
         let diffusion = Correlations::diffusions(observers.correlations.as_ref());
@@ -682,11 +690,10 @@ impl Job<'_> {
             sim_time: stats.simulated_time,
             equilibration_time: self.eq_steps as f64 * self.settings.dt,
             temperature: u.temperature_out(sm.temperature.mean),
-            temperature_error: u.temperature_out(blocked(|r| r.temperature)),
+            temperature_error: u.temperature_out(temperature_error),
             temperature_start: u.temperature_out(kt_start),
             translational_temperature: u.temperature_out(sm.temperature_translational.mean),
-            translational_temperature_error: u
-                .temperature_out(blocked(|r| r.temperature_translational)),
+            translational_temperature_error: u.temperature_out(translational_error),
             rotational_temperature: mean_t_rot.map(|t| u.temperature_out(t)),
             rotational_temperature_error: rot_error,
             pressure: u.pressure_out(sm.pressure.mean),
@@ -722,6 +729,10 @@ impl Job<'_> {
             diffusion_vacf: diffusion.vacf,
             diffusion_msd_error: diffusion.msd_error,
             diffusion_vacf_error: diffusion.vacf_error,
+            errors_without_plateau: without_plateau
+                .into_iter()
+                .chain(diffusion.without_plateau.iter().map(|k| (*k).to_owned()))
+                .collect(),
             seed: scene.seed,
             ignored_keys: self.ignored,
             notes: self.notes,
