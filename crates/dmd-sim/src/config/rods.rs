@@ -263,7 +263,8 @@ pub fn tops_model(
     scene: &Scene,
     body_species: &[u32],
     tables: Vec<PairTable<Water>>,
-    start: Option<(Vec<glam::DQuat>, Vec<DVec3>)>,
+    attitudes: Option<Vec<glam::DQuat>>,
+    omegas: Option<Vec<DVec3>>,
 ) -> Result<Terraced<Water>, SceneError> {
     let species: Vec<BodySpecies<TopInertia>> = scene
         .species
@@ -279,7 +280,10 @@ pub fn tops_model(
         })
         .collect::<Result<_, _>>()?;
     let inertia: Vec<TopInertia> = species.iter().map(|s| s.inertia).collect();
-    let (poses, omegas) = start.unwrap_or_else(|| tops_start(scene, &inertia, body_species));
+    let (poses, omegas) = match (attitudes, omegas) {
+        (Some(q), Some(w)) => (q, w),
+        (q, _) => tops_start(scene, &inertia, body_species, q),
+    };
     Terraced::new(
         species,
         tables,
@@ -294,18 +298,22 @@ pub fn tops_model(
 }
 
 /// The attitudes (body → lab) and lab angular velocities of rigid tops at the start of a run
-/// (both engines): uniform on SO(3), or every body `ẑ` along `init.axis`; each body-frame
-/// component of `ω` Gaussian with variance `kT/I_k` (the moments of `inertia[species]`) from
-/// its own stream of the seed, all scaled to exactly `3/2 N kT`.
+/// (both engines): `attitudes` (a start file's), else uniform on SO(3), or every body `ẑ` along
+/// `init.axis`; each body-frame component of `ω` Gaussian with variance `kT/I_k` (the moments
+/// of `inertia[species]`) from its own stream of the seed, all scaled to exactly `3/2 N kT`.
 pub fn tops_start(
     scene: &Scene,
     inertia: &[TopInertia],
     body_species: &[u32],
+    attitudes: Option<Vec<glam::DQuat>>,
 ) -> (Vec<glam::DQuat>, Vec<DVec3>) {
     let n = body_species.len();
-    let poses: Vec<glam::DQuat> = match scene.init.axis {
-        Some(a) => vec![glam::DQuat::from_rotation_arc(DVec3::Z, DVec3::from(a).normalize()); n],
-        None => random_attitudes(n, scene.seed),
+    let poses: Vec<glam::DQuat> = match (attitudes, scene.init.axis) {
+        (Some(q), _) => q,
+        (None, Some(a)) => {
+            vec![glam::DQuat::from_rotation_arc(DVec3::Z, DVec3::from(a).normalize()); n]
+        }
+        (None, None) => random_attitudes(n, scene.seed),
     };
     let kt = scene.init.temperature;
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(scene.seed ^ 0x0e6a_0e6a_0000_0009);

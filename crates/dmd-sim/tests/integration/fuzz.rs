@@ -559,7 +559,10 @@ rod 1.0 1.0 3.0 0.0 -0.1 0.0 0 0 0 1 0 1 1 1 3\n"
             match init::read_xyz(scene, &file) {
                 Ok(c) => {
                     let masses = vec![1.0; c.positions.len()];
-                    if let Err(e) = init::read_motion(scene, &file, &masses, rod_names) {
+                    let moments = vec![[1.0, 1.0, 0.0]; c.positions.len()];
+                    if let Err(e) =
+                        init::read_motion(scene, &file, &masses, rod_names.then_some(&moments[..]))
+                    {
                         messages.push(e.to_string());
                     }
                 }
