@@ -138,10 +138,18 @@ fn xyz_frames(path: &Path) -> Vec<Vec<Vec<String>>> {
 /// The largest difference of two XYZ frames, column by column relative to the column's
 /// largest magnitude (words that are not numbers must be equal).
 fn xyz_difference(a: &[Vec<String>], b: &[Vec<String>]) -> f64 {
+    xyz_columns_difference(a, b, 0..a[0].len())
+}
+
+/// [`xyz_difference`] over the columns `columns` only.
+fn xyz_columns_difference(
+    a: &[Vec<String>],
+    b: &[Vec<String>],
+    columns: std::ops::Range<usize>,
+) -> f64 {
     assert_eq!(a.len(), b.len());
-    let width = a[0].len();
     let mut worst: f64 = 0.0;
-    for c in 0..width {
+    for c in columns {
         let col = |f: &[Vec<String>]| -> Vec<Option<f64>> {
             f.iter().map(|r| r[c].parse::<f64>().ok()).collect()
         };
@@ -256,9 +264,42 @@ fn water_starts_from_its_last_frame_on_both_engines() {
     let d = xyz_difference(xyz_c.last().unwrap(), &xyz_e[0]);
     eprintln!("water on dmd from the smd run's trajectory.xyz: XYZ frames differ by {d:e}");
     assert!(d <= 1e-8, "the dmd engine's first frame differs by {d:e}");
+    // Tops take their whole attitudes alone (`orientations = "file"`) on either engine.
+    let gsd = a.join("trajectory.gsd");
+    let xyz = a.join("trajectory.xyz");
+    for engine in [Engine::Smd, Engine::Dmd] {
+        let mut s = o.clone();
+        s.push("run.time=0.002".to_owned());
+        let d = attitudes_only(&text, &s, (&gsd, &xyz), 0.002, engine);
+        eprintln!("water on {engine:?}, attitudes from trajectory.gsd: differ by {d:e}");
+        assert!(d <= 1e-6, "{d:e}");
+    }
     for p in [a, c, e] {
         let _ = std::fs::remove_dir_all(p);
     }
+}
+
+/// Starts `text` on `engine` from the positions and attitudes of the last frame of `file`
+/// with Maxwell–Boltzmann velocities, and returns how far its first XYZ frame's positions and
+/// orientations (columns 1–3 and 7–10) are from that frame's (`xyz`).
+fn attitudes_only(
+    text: &str,
+    first: &[String],
+    (file, xyz): (&Path, &Path),
+    interval: f64,
+    engine: Engine,
+) -> f64 {
+    let b = dir("attitudes-only");
+    let mut o = first.to_vec();
+    o.extend(start_from(file, true));
+    o.retain(|s| s != "init.velocities=\"file\"");
+    run(text, &o, interval, engine, &b);
+    let a = xyz_frames(xyz);
+    let b_frames = xyz_frames(&b.join("trajectory.xyz"));
+    let (a, b0) = (a.last().unwrap(), &b_frames[0]);
+    let d = xyz_columns_difference(a, b0, 1..4).max(xyz_columns_difference(a, b0, 7..11));
+    let _ = std::fs::remove_dir_all(&b);
+    d
 }
 
 #[test]
@@ -266,6 +307,12 @@ fn benzene_like_molecules_start_from_their_last_frame() {
     let text = shipped("benzene-like.toml");
     let o = strings(&["run.time=0.2"]);
     let a = round_trip("benzene", &text, &o, 0.1, true, (1e-6, 1e-8));
+    // Attitudes alone (`orientations = "file"`, Maxwell–Boltzmann velocities).
+    let gsd = a.join("trajectory.gsd");
+    let xyz = a.join("trajectory.xyz");
+    let d = attitudes_only(&text, &o, (&gsd, &xyz), 0.1, Engine::Dmd);
+    eprintln!("benzene, attitudes from trajectory.gsd: positions and orientations differ by {d:e}");
+    assert!(d <= 1e-6, "{d:e}");
     python_reads(&a.join("trajectory.gsd"), "SphereUnion", true);
     let _ = std::fs::remove_dir_all(a);
 }
