@@ -870,7 +870,10 @@ pub fn read_molecules(
             return Ok(None);
         }
         let f = start.frame;
-        let file_box = gsd_box(&f).ok();
+        let file_box = match box_lengths(scene) {
+            Some(_) => None,
+            None => Some(gsd_box(&f).map_err(|e| err(key, e))?),
+        };
         let velocity = f.velocity.clone();
         let rows: Vec<AtomRow> = (0..f.n())
             .map(|i| {
