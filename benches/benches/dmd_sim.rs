@@ -173,15 +173,17 @@ fn stepped(c: &mut Criterion) {
 fn paper_rods<S: Scheduler>(
     window: f64,
 ) -> Simulation<dmd_sim::terraced::Terraced<potential::LjRod>, S> {
-    use dmd_sim::rods::{Plan, equipartitioned_omegas, random_axes, rod_species, search_settings};
+    use dmd_sim::plan::Plan;
+    use dmd_sim::rods::{equipartitioned_omegas, random_axes, rod_species, search_settings};
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/rods-paper.toml");
     let scene = dmd_sim::scene::Scene::load(&path, &[])
         .expect("the shipped scene reads")
         .0
         .internal();
-    let Ok(Plan::Rods(tables)) = Plan::of(&scene) else {
+    let Ok(Plan::Terraced(plan)) = Plan::of(&scene) else {
         panic!("the paper's scene is a rods scene")
     };
+    let tables = plan.take::<dmd_sim::scene::LjRodsSpec>();
     let config = dmd_sim::init::lattice(&scene, 0.0).expect("a lattice");
     let n = config.positions.len();
     let kt = scene.init.temperature;

@@ -251,6 +251,39 @@ def test_rods_have_unit_quaternions_and_the_kinetic_energy_of_their_motion():
     assert kinetic / 100.0 == pytest.approx(sim.state()["kinetic_energy"], rel=1e-10)
 
 
+def test_rods_load_from_the_last_frame_of_their_gsd_trajectory(tmp_path):
+    hoomd = pytest.importorskip("gsd.hoomd")
+    short = {
+        "species.0.count": 216,
+        "run.equilibration_time": 0.0,
+        "run.time": 0.01,
+        "output": None,
+        "output.gsd": {"interval": 0.005},
+    }
+    dmdsim.run(SCENES / "rods-paper.toml", out=tmp_path / "a", set=short)
+    path = tmp_path / "a" / "trajectory.gsd"
+    start = {
+        "species.0.count": 216,
+        "init.positions": "file",
+        "init.file": str(path),
+        "init.frame": -1,
+        "init.orientations": "file",
+        "init.velocities": "file",
+    }
+    sim = dmdsim.load(SCENES / "rods-paper.toml", set=start)
+    with hoomd.open(str(path), "r") as t:
+        last = t[len(t) - 1]
+    # The state of the frame, to its single precision: positions (GSD's box is centred, the
+    # engine's starts at 0), quaternions (w, x, y, z both) and velocities (Å/ps).
+    box = sim.box_lengths
+    d = sim.positions - last.particles.position
+    d -= box * np.round(d / box)
+    assert np.abs(d).max() < 1e-6 * box.max()
+    np.testing.assert_allclose(sim.quaternions, last.particles.orientation, atol=1e-6)
+    v = last.particles.velocity
+    assert np.abs(sim.velocities - v).max() < 1e-6 * np.abs(v).max()
+
+
 def test_ctrl_c_stops_the_engine_and_leaves_it_usable():
     sim = dmdsim.load(hard_spheres(count=500))
     timer = threading.Timer(0.5, lambda: os.kill(os.getpid(), signal.SIGINT))

@@ -1,5 +1,5 @@
 //! `cargo xtask fuzz [--minutes M] [--only TARGET,..] [--seed S]`: the fuzz targets of
-//! `crates/dmd-sim/tests/integration/fuzz.rs` (scene, set, xyz, checkpoint), one after the
+//! `crates/dmd-sim/tests/integration/fuzz.rs` (scene, set, xyz, gsd, checkpoint), one after the
 //! other, each for `M` minutes (1 by default) in the test profile (debug assertions on), from
 //! seed `S` (the clock by default, so every run explores new inputs). Prints each target's
 //! count of inputs tried; exits non-zero when a target finds something (the inputs are kept
@@ -14,6 +14,7 @@ const TARGETS: &[(&str, &str)] = &[
     ("scene", "fuzz::fuzz_scene_parser_and_checker"),
     ("set", "fuzz::fuzz_set_overrides"),
     ("xyz", "fuzz::fuzz_xyz_start_file"),
+    ("gsd", "fuzz::fuzz_gsd_start_file"),
     ("checkpoint", "fuzz::fuzz_checkpoint_reader"),
 ];
 

@@ -34,7 +34,7 @@ commands:
   bench [--only NAME[,NAME..]] [-- CRITERION ARGS]
                              run the criterion benchmarks in benches/
   fuzz [--minutes M] [--only TARGET[,TARGET..]] [--seed S]
-                             run the fuzz targets (scene, set, xyz, checkpoint), M minutes each
+                             run the fuzz targets (scene, set, xyz, gsd, checkpoint), M minutes each
 ";
 
 fn main() -> ExitCode {

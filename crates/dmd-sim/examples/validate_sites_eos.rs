@@ -212,7 +212,7 @@ fn system(scene: &Scene) -> Result<Simulation<Sites, Queue>, String> {
         scene.init.temperature,
         scene.seed,
     );
-    let sites = model(&scene, &config, plan, false).map_err(|e| e.to_string())?;
+    let sites = model(&scene, &config, plan, false, None, None).map_err(|e| e.to_string())?;
     let settings = LoopSettings {
         rebase_events: 1_000_000,
         seed: scene.seed,

@@ -326,8 +326,14 @@ fn overlap(
     None
 }
 
-/// The [`Flexible`] model of a scene: random starts without overlaps, RATTLE and search
-/// settings.
+/// The atoms of each molecule about its centre (lab, length) and, when the file gives them,
+/// their velocities relative to the centre's (length/time).
+pub type FileConformations = (Vec<Vec<DVec3>>, Option<Vec<Vec<DVec3>>>);
+
+/// The [`Flexible`] model of a scene: a start file's conformations (`start`: each molecule's
+/// atoms about its centre, with their velocities relative to the centre's or, without them,
+/// Maxwell–Boltzmann ones that the model projects onto the bonds' tangent) or random starts
+/// without overlaps, RATTLE and search settings.
 ///
 /// For a `resumed` run the conformations drawn here are placeholders that the checkpoint's
 /// state replaces: they are drawn once, without the overlap search.
@@ -339,9 +345,34 @@ pub fn model(
     config: &Configuration,
     plan: FlexiblePlan,
     resumed: bool,
+    start: Option<FileConformations>,
 ) -> Result<Flexible, SceneError> {
     let n = config.positions.len();
     let kt = scene.init.temperature;
+    if let Some((qs, us)) = start {
+        let us = us.unwrap_or_else(|| {
+            random_internal(
+                &plan.types,
+                &config.species,
+                kt,
+                scene.seed ^ 0xf1e7_0000_0000_0000,
+            )
+            .1
+        });
+        let (rattle, settings) = (rattle_settings(scene, &plan), search_settings(scene, &plan));
+        return Flexible::new(
+            plan.types,
+            plan.potentials,
+            &config.species,
+            &qs,
+            &us,
+            0.0,
+            rattle,
+            settings,
+            scene.seed ^ 0x5ea2_c400_0000_000b,
+        )
+        .map_err(|e| SceneError::invalid("init.file", e.to_string()));
+    }
     let ty = |i: usize| config.species[i] as usize;
     let where_ = match scene.init.positions {
         Positions::File => "init.file",

@@ -163,9 +163,9 @@ struct XyzFrame<'a> {
     rows: Vec<(usize, Vec<&'a str>)>,
 }
 
-/// Frame `index` of `text` (0 the first, −1 the last) for `n` bodies; errors as plain
-/// messages (the caller names the key and the file).
-fn xyz_frame(text: &str, index: i64, n: usize) -> Result<XyzFrame<'_>, String> {
+/// Frame `index` of `text` (0 the first, −1 the last) for `n` bodies (any number with `None`);
+/// errors as plain messages (the caller names the key and the file).
+fn xyz_frame(text: &str, index: i64, n: Option<usize>) -> Result<XyzFrame<'_>, String> {
     let lines: Vec<&str> = text.lines().collect();
     // The first line of every frame up to the one asked for (all of them from the end).
     let mut starts = Vec::new();
@@ -200,7 +200,7 @@ fn xyz_frame(text: &str, index: i64, n: usize) -> Result<XyzFrame<'_>, String> {
     }
     let start = starts[k as usize];
     let count: usize = lines[start].trim().parse().expect("parsed above");
-    if count != n {
+    if let Some(n) = n.filter(|&n| n != count) {
         return Err(format!(
             "the file has {count} bodies, the scene's species count {n}"
         ));
@@ -286,7 +286,8 @@ fn numbers(frame: &XyzFrame<'_>, at: usize, width: usize) -> Result<Vec<Vec<f64>
         .collect()
 }
 
-/// Reads positions from an XYZ or extended XYZ file: a count line, a comment line (an
+/// Reads positions from an XYZ or extended XYZ file (a GSD file, named `….gsd`:
+/// [`read_gsd`]): a count line, a comment line (an
 /// extended-XYZ `Lattice="Lx 0 0 0 Ly 0 0 0 Lz"` gives the box), then `species x y z …` per
 /// body. The species must be the scene's, in the scene's counts. The frame read is
 /// `init.frame` (default the first); with an `id:I:1` column the rows go to the bodies their
@@ -295,12 +296,15 @@ fn numbers(frame: &XyzFrame<'_>, at: usize, width: usize) -> Result<Vec<Vec<f64>
 /// # Errors
 /// [`SceneError::Invalid`] naming `init.file` for unreadable or inconsistent files.
 pub fn read_xyz(scene: &Scene, path: &Path) -> Result<Configuration, SceneError> {
+    if is_gsd(path) {
+        return read_gsd(scene, path);
+    }
     let key = "init.file";
     let name = shown(scene, path);
     let err = |msg: String| SceneError::invalid(key, format!("{name}: {msg}"));
     let text = std::fs::read_to_string(path).map_err(|e| err(e.to_string()))?;
     let count = scene.n_bodies() as usize;
-    let frame = xyz_frame(&text, scene.init.frame.unwrap_or(0), count).map_err(&err)?;
+    let frame = xyz_frame(&text, scene.init.frame.unwrap_or(0), Some(count)).map_err(&err)?;
     let file_box = parse_lattice(frame.comment).map_err(&err)?;
     let lengths = match (box_lengths(scene), file_box) {
         (Some(l), _) => l,
@@ -354,7 +358,8 @@ pub fn read_xyz(scene: &Scene, path: &Path) -> Result<Configuration, SceneError>
 
 /// Reads the attitudes of `n` bodies from the frame `init.frame` of an extended XYZ file (as
 /// [`read_xyz`] picks it): the `orientation:R:4` column of its `Properties` (unit quaternions
-/// with the scalar last, as `dmd` writes them), normalised. Errors name `key`.
+/// with the scalar last, as `dmd` writes them), normalised; of a GSD file, its
+/// `particles/orientation` chunk (scalar first). Errors name `key`.
 ///
 /// # Errors
 /// [`SceneError::Invalid`] naming `key` for a file without the column or with bad numbers.
@@ -364,10 +369,13 @@ pub fn read_attitudes(
     n: usize,
     key: &str,
 ) -> Result<Vec<glam::DQuat>, SceneError> {
+    if is_gsd(path) {
+        return gsd_attitudes(&gsd_start(scene, path, Some(n), key)?, scene, path, key);
+    }
     let name = shown(scene, path);
     let err = |msg: String| SceneError::invalid(key, format!("{name}: {msg}"));
     let text = std::fs::read_to_string(path).map_err(|e| err(e.to_string()))?;
-    let frame = xyz_frame(&text, scene.init.frame.unwrap_or(0), n).map_err(&err)?;
+    let frame = xyz_frame(&text, scene.init.frame.unwrap_or(0), Some(n)).map_err(&err)?;
     if !frame.comment.contains("Properties=") {
         return Err(err(
             "no Properties=… in the comment line, so no orientation column".into(),
@@ -430,9 +438,13 @@ pub struct FileMotion {
     pub images: Option<Vec<[i32; 3]>>,
 }
 
-/// Reads the velocities (and with `rotating` the lab angular velocities) of the `n` bodies of
-/// the frame `init.frame` of `init.file`, in the units `dmd` writes them; the masses of the
-/// `masses:R:1` column, when the file has one, must be the scene's (`masses`, per body).
+/// Reads the velocities (and for bodies with `moments`, their principal moments of inertia
+/// per body, the lab angular velocities) of the `n` bodies of the frame `init.frame` of
+/// `init.file`, in the units `dmd` writes them; the masses of the `masses:R:1` column, when the
+/// file has one, must be the scene's (`masses`, per body). A GSD file gives the
+/// `particles/velocity`, `particles/image` and (with `moments`) `particles/orientation` and
+/// `particles/angmom` chunks: the lab angular velocity is `R I⁻¹ L_body` of HOOMD's
+/// `angmom = 2 q ⊗ (0, L_body)`, no rotation about an axis of zero moment.
 ///
 /// # Errors
 /// [`SceneError::Invalid`] naming `init.velocities` for a file without the columns, with bad
@@ -441,14 +453,18 @@ pub fn read_motion(
     scene: &Scene,
     path: &Path,
     masses: &[f64],
-    rotating: bool,
+    moments: Option<&[[f64; 3]]>,
 ) -> Result<FileMotion, SceneError> {
     let key = "init.velocities";
+    if is_gsd(path) {
+        return gsd_motion(scene, path, masses, moments);
+    }
+    let rotating = moments.is_some();
     let name = shown(scene, path);
     let err = |msg: String| SceneError::invalid(key, format!("{name}: {msg}"));
     let text = std::fs::read_to_string(path).map_err(|e| err(e.to_string()))?;
     let n = masses.len();
-    let frame = xyz_frame(&text, scene.init.frame.unwrap_or(0), n).map_err(&err)?;
+    let frame = xyz_frame(&text, scene.init.frame.unwrap_or(0), Some(n)).map_err(&err)?;
     let vector = |name: &str, what: &str| -> Result<Vec<DVec3>, SceneError> {
         let at = column(frame.comment, name, 3)
             .map_err(&err)?
@@ -506,6 +522,552 @@ pub fn read_motion(
         omegas,
         images,
     })
+}
+
+// ----- GSD start files -------------------------------------------------------------------------
+
+/// Whether a start file is read as GSD: its name ends in `.gsd` (any other is read as XYZ).
+pub fn is_gsd(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("gsd"))
+}
+
+/// The frame `init.frame` of a GSD start file, with the per-particle masses when it stores
+/// them (`particles/mass`).
+struct GsdStart {
+    frame: gsd::Frame,
+    masses: Option<Vec<f32>>,
+}
+
+/// Reads frame `init.frame` (negative: from the end) of the GSD file `path` with `n` particles
+/// (any number with `None`); errors name `key`.
+fn gsd_start(
+    scene: &Scene,
+    path: &Path,
+    n: Option<usize>,
+    key: &str,
+) -> Result<GsdStart, SceneError> {
+    let name = shown(scene, path);
+    let err = |msg: String| SceneError::invalid(key, format!("{name}: {msg}"));
+    let mut reader = gsd::Reader::open(path).map_err(|e| err(e.to_string()))?;
+    let frames = reader.frames() as i64;
+    let index = scene.init.frame.unwrap_or(0);
+    let k = if index < 0 { frames + index } else { index };
+    if !(0..frames).contains(&k) {
+        return Err(err(format!(
+            "init.frame = {index}, but the file has {frames} {}",
+            if frames == 1 { "frame" } else { "frames" }
+        )));
+    }
+    let frame = reader
+        .read_frame(k as u64)
+        .map_err(|e| err(format!("frame {k}: {e}")))?;
+    let count = frame.n();
+    if let Some(n) = n.filter(|&n| n != count) {
+        return Err(err(format!(
+            "frame {k} has {count} particles, the scene's species count {n}"
+        )));
+    }
+    if let Some((i, t)) = frame
+        .typeid
+        .iter()
+        .enumerate()
+        .find(|(_, t)| **t as usize >= frame.types.len())
+    {
+        return Err(err(format!(
+            "particle {i} has type id {t}, but the file names {} types",
+            frame.types.len()
+        )));
+    }
+    let masses = match reader.read_chunk::<f32>(k as u64, "particles/mass") {
+        Ok(a) if a.data.len() == count => Some(a.data),
+        Ok(a) => {
+            return Err(err(format!(
+                "particles/mass has {} rows for {count} particles",
+                a.data.len()
+            )));
+        }
+        Err(gsd::Error::MissingChunk { .. }) => None,
+        Err(e) => return Err(err(e.to_string())),
+    };
+    Ok(GsdStart { frame, masses })
+}
+
+/// The box of a GSD frame (orthorhombic only).
+fn gsd_box(frame: &gsd::Frame) -> Result<DVec3, String> {
+    let b = frame.sim_box;
+    if (b.xy, b.xz, b.yz) != (0.0, 0.0, 0.0) {
+        return Err(
+            "only orthorhombic boxes are supported (configuration/box tilts must be 0)".into(),
+        );
+    }
+    let l = DVec3::new(f64::from(b.lx), f64::from(b.ly), f64::from(b.lz));
+    if !(l.is_finite() && l.min_element() > 0.0) {
+        return Err("configuration/box edges must be positive".into());
+    }
+    Ok(l)
+}
+
+/// Reads positions from frame `init.frame` of a GSD file (HOOMD's format, as `output.gsd`
+/// writes it): `particles/position` (length; a position outside the box is as good as its
+/// image inside), the species of each particle by the name `particles/types` gives its
+/// `particles/typeid`, and the box from `configuration/box` unless the scene gives one. The
+/// species must be the scene's, in the scene's counts, in body order.
+///
+/// # Errors
+/// [`SceneError::Invalid`] naming `init.file` for unreadable or inconsistent files.
+pub fn read_gsd(scene: &Scene, path: &Path) -> Result<Configuration, SceneError> {
+    let key = "init.file";
+    let name = shown(scene, path);
+    let err = |msg: String| SceneError::invalid(key, format!("{name}: {msg}"));
+    let count = scene.n_bodies() as usize;
+    let GsdStart { frame, .. } = gsd_start(scene, path, Some(count), key)?;
+    let lengths = match box_lengths(scene) {
+        Some(l) => l,
+        None => gsd_box(&frame).map_err(&err)?,
+    };
+    let names: Vec<&str> = scene.species.iter().map(|s| s.name.as_str()).collect();
+    let mut positions = Vec::with_capacity(count);
+    let mut species = Vec::with_capacity(count);
+    let mut per_species = vec![0u64; names.len()];
+    for (i, (p, &t)) in frame.position.iter().zip(&frame.typeid).enumerate() {
+        let type_name = frame.types[t as usize].as_str();
+        let s = names.iter().position(|&n| n == type_name).ok_or_else(|| {
+            err(format!(
+                "particle {i}: type `{type_name}` is not a species of the scene"
+            ))
+        })?;
+        let x = DVec3::new(f64::from(p[0]), f64::from(p[1]), f64::from(p[2]));
+        if !x.is_finite() {
+            return Err(err(format!("particle {i}: the position is not finite")));
+        }
+        per_species[s] += 1;
+        positions.push(x);
+        species.push(s as u32);
+    }
+    for (s, sp) in scene.species.iter().enumerate() {
+        if per_species[s] != sp.count {
+            return Err(err(format!(
+                "species `{}` has {} bodies in the file, {} in the scene",
+                sp.name, per_species[s], sp.count
+            )));
+        }
+    }
+    Ok(Configuration {
+        lengths,
+        positions,
+        species,
+        lattice_spacing: None,
+    })
+}
+
+/// The unit quaternions of `particles/orientation` (`(w, x, y, z)`), normalised; without the
+/// chunk, the hoomd schema's default, the identity (writers leave out a chunk that holds only
+/// its default).
+fn gsd_attitudes(
+    start: &GsdStart,
+    scene: &Scene,
+    path: &Path,
+    key: &str,
+) -> Result<Vec<glam::DQuat>, SceneError> {
+    let name = shown(scene, path);
+    let err = |msg: String| SceneError::invalid(key, format!("{name}: {msg}"));
+    let Some(rows) = start.frame.orientation.as_ref() else {
+        return Ok(vec![glam::DQuat::IDENTITY; start.frame.n()]);
+    };
+    rows.iter()
+        .enumerate()
+        .map(|(i, q)| {
+            let q = glam::DQuat::from_xyzw(
+                f64::from(q[1]),
+                f64::from(q[2]),
+                f64::from(q[3]),
+                f64::from(q[0]),
+            );
+            let len = q.length();
+            if len.is_finite() && len > 0.5 && len < 2.0 {
+                Ok(q / len)
+            } else {
+                Err(err(format!(
+                    "particle {i}: the orientation is not a unit quaternion"
+                )))
+            }
+        })
+        .collect()
+}
+
+/// [`read_motion`] of a GSD file.
+fn gsd_motion(
+    scene: &Scene,
+    path: &Path,
+    masses: &[f64],
+    moments: Option<&[[f64; 3]]>,
+) -> Result<FileMotion, SceneError> {
+    let key = "init.velocities";
+    let name = shown(scene, path);
+    let err = |msg: String| SceneError::invalid(key, format!("{name}: {msg}"));
+    let start = gsd_start(scene, path, Some(masses.len()), key)?;
+    let frame = &start.frame;
+    let vector = |v: &[f32; 3]| DVec3::new(f64::from(v[0]), f64::from(v[1]), f64::from(v[2]));
+    let velocities: Vec<DVec3> = frame
+        .velocity
+        .as_ref()
+        .ok_or_else(|| {
+            err(
+                "the file has no particles/velocity chunk (the hoomd schema's default would \
+                 start every body at rest: use `init.velocities = \"maxwell-boltzmann\"`)"
+                    .into(),
+            )
+        })?
+        .iter()
+        .map(vector)
+        .collect();
+    if let Some(i) = velocities.iter().position(|v| !v.is_finite()) {
+        return Err(err(format!("particle {i}: the velocity is not finite")));
+    }
+    if let Some(file) = &start.masses {
+        check_masses(masses, file, &frame.typeid, &frame.types).map_err(&err)?;
+    }
+    let omegas = match moments {
+        Some(moments) => {
+            let attitudes = gsd_attitudes(&start, scene, path, key)?;
+            let angmom = frame.angmom.as_ref().ok_or_else(|| {
+                err(
+                    "the file has no particles/angmom chunk (angular momenta; the hoomd \
+                     schema's default would start every body without rotation)"
+                        .into(),
+                )
+            })?;
+            let mut omegas = Vec::with_capacity(attitudes.len());
+            for (i, ((&q, p), m)) in attitudes.iter().zip(angmom).zip(moments).enumerate() {
+                // angmom = 2 q ⊗ (0, L_body) = 2 (0, L_lab) ⊗ q: L_lab = ½ angmom ⊗ q*.
+                let p = glam::DQuat::from_xyzw(
+                    f64::from(p[1]),
+                    f64::from(p[2]),
+                    f64::from(p[3]),
+                    f64::from(p[0]),
+                );
+                let l = (p * q.conjugate()) * 0.5;
+                let l = DVec3::new(l.x, l.y, l.z);
+                if !l.is_finite() {
+                    return Err(err(format!(
+                        "particle {i}: the angular momentum is not finite"
+                    )));
+                }
+                omegas.push(crate::analysis::output::angular_velocity(q, l, *m));
+            }
+            Some(omegas)
+        }
+        None => None,
+    };
+    let images = match &frame.image {
+        Some(rows) => {
+            if let Some(i) = rows
+                .iter()
+                .position(|im| im.iter().any(|x| x.unsigned_abs() > MAX_IMAGE))
+            {
+                return Err(err(format!(
+                    "particle {i}: particles/image must be at most {:e} in size",
+                    f64::from(MAX_IMAGE)
+                )));
+            }
+            Some(rows.clone())
+        }
+        None => None,
+    };
+    Ok(FileMotion {
+        velocities,
+        omegas,
+        images,
+    })
+}
+
+/// The masses a GSD file stores (`particles/mass`, single precision) against the scene's.
+fn check_masses(
+    masses: &[f64],
+    file: &[f32],
+    typeid: &[u32],
+    types: &[String],
+) -> Result<(), String> {
+    for (i, ((&m, &x), &t)) in masses.iter().zip(file).zip(typeid).enumerate() {
+        if (f64::from(x) - m).abs() > 1e-6 * m.abs() {
+            return Err(format!(
+                "particle {i}: mass {x} in the file, {m} for species `{}` in the scene: the \
+                 velocities belong to other bodies",
+                types[t as usize]
+            ));
+        }
+    }
+    Ok(())
+}
+
+// ----- Semi-flexible molecules from their atoms ------------------------------------------------
+
+/// Semi-flexible molecules read from the atoms of a start file.
+#[derive(Clone, Debug)]
+pub struct FileMolecules {
+    /// The molecules' centres of mass (unwrapped: atom 0 as the file places it, the others at
+    /// their nearest image of it), species and box.
+    pub config: Configuration,
+    /// Each molecule's atom positions relative to its centre of mass (lab frame, length).
+    pub atoms: Vec<Vec<DVec3>>,
+    /// With `init.velocities = "file"`: each molecule's atom velocities relative to its
+    /// centre's (length/time).
+    pub internal: Option<Vec<Vec<DVec3>>>,
+    /// With `init.velocities = "file"`: the centres' velocities and, when the file has image
+    /// counters, zero images (the centres are unwrapped already).
+    pub motion: Option<FileMotion>,
+}
+
+/// One atom of a start file: its kind's name, position, velocity and image counter.
+struct AtomRow {
+    kind: String,
+    position: DVec3,
+    velocity: Option<DVec3>,
+    image: Option<[i32; 3]>,
+}
+
+/// The molecule type of each species: its atoms' kind names and masses.
+pub struct MoleculeShape {
+    /// The kind name of each atom.
+    pub kinds: Vec<String>,
+    /// The mass of each atom (mass).
+    pub masses: Vec<f64>,
+}
+
+/// Reads semi-flexible molecules from frame `init.frame` of a start file that holds their
+/// atoms, as `output.gsd` and `output.trajectory` write them: one particle per atom, the
+/// molecules one after the other in body order, each atom named by its site kind (GSD
+/// `particles/types`, XYZ `species`), with positions (GSD `particles/position`, XYZ `pos`),
+/// image counters (`particles/image`, `map_shift`) and, with `init.velocities = "file"`,
+/// velocities (`particles/velocity`, `velo`). Each molecule's species is the one whose atom
+/// kinds come next. `shapes` gives the atoms of each species. A file with one row per
+/// molecule (its centre) gives `None`: [`read_xyz`] reads it.
+///
+/// # Errors
+/// [`SceneError::Invalid`] naming `init.file` (positions) or `init.velocities` for files
+/// that are unreadable, have neither the molecules' nor their atoms' count, or whose atoms
+/// do not spell the scene's molecules in its species counts.
+pub fn read_molecules(
+    scene: &Scene,
+    path: &Path,
+    shapes: &[MoleculeShape],
+) -> Result<Option<FileMolecules>, SceneError> {
+    let key = "init.file";
+    let name = shown(scene, path);
+    let err = |key: &str, msg: String| SceneError::invalid(key, format!("{name}: {msg}"));
+    let with_velocities = scene.init.velocities == crate::config::scene::Velocities::File;
+    let n_molecules = scene.n_bodies() as usize;
+    let n_atoms: usize = scene
+        .species
+        .iter()
+        .zip(shapes)
+        .map(|(sp, t)| sp.count as usize * t.kinds.len())
+        .sum();
+    let (rows, file_box) = if is_gsd(path) {
+        let start = gsd_start(scene, path, None, key)?;
+        if start.frame.n() == n_molecules {
+            return Ok(None);
+        }
+        let f = start.frame;
+        let file_box = match box_lengths(scene) {
+            Some(_) => None,
+            None => Some(gsd_box(&f).map_err(|e| err(key, e))?),
+        };
+        let velocity = f.velocity.clone();
+        let rows: Vec<AtomRow> = (0..f.n())
+            .map(|i| {
+                let p = f.position[i];
+                AtomRow {
+                    kind: f.types[f.typeid[i] as usize].clone(),
+                    position: DVec3::new(f64::from(p[0]), f64::from(p[1]), f64::from(p[2])),
+                    velocity: velocity.as_ref().map(|v| {
+                        DVec3::new(f64::from(v[i][0]), f64::from(v[i][1]), f64::from(v[i][2]))
+                    }),
+                    image: f.image.as_ref().map(|im| im[i]),
+                }
+            })
+            .collect();
+        (rows, file_box)
+    } else {
+        let text = std::fs::read_to_string(path).map_err(|e| err(key, e.to_string()))?;
+        let frame =
+            xyz_frame(&text, scene.init.frame.unwrap_or(0), None).map_err(|e| err(key, e))?;
+        if frame.rows.len() == n_molecules {
+            return Ok(None);
+        }
+        let file_box = parse_lattice(frame.comment).map_err(|e| err(key, e))?;
+        let positions = numbers(&frame, 1, 3).map_err(|line| {
+            err(
+                key,
+                format!("line {line}: expected three finite coordinates"),
+            )
+        })?;
+        let velocities = match column(frame.comment, "velo", 3).map_err(|e| err(key, e))? {
+            Some(at) => Some(numbers(&frame, at, 3).map_err(|line| {
+                err(
+                    "init.velocities",
+                    format!("line {line}: expected three finite velocities"),
+                )
+            })?),
+            None => None,
+        };
+        let images =
+            match column(frame.comment, "map_shift", 3).map_err(|e| err(key, e))? {
+                Some(at) => Some(numbers(&frame, at, 3).map_err(|line| {
+                    err(key, format!("line {line}: expected three image counters"))
+                })?),
+                None => None,
+            };
+        let rows = frame
+            .rows
+            .iter()
+            .enumerate()
+            .map(|(i, (_, words))| AtomRow {
+                kind: words.first().copied().unwrap_or("").to_owned(),
+                position: DVec3::from_slice(&positions[i]),
+                velocity: velocities.as_ref().map(|v| DVec3::from_slice(&v[i])),
+                image: images.as_ref().map(|im| {
+                    let x = &im[i];
+                    [x[0] as i32, x[1] as i32, x[2] as i32]
+                }),
+            })
+            .collect();
+        (rows, file_box)
+    };
+    if rows.len() != n_atoms {
+        return Err(err(
+            key,
+            format!(
+                "the file has {} particles: neither the scene's {n_molecules} molecules (their \
+                 centres) nor their {n_atoms} atoms",
+                rows.len()
+            ),
+        ));
+    }
+    let lengths = match (box_lengths(scene), file_box) {
+        (Some(l), _) | (None, Some(l)) => l,
+        (None, None) => {
+            return Err(err(
+                key,
+                "no box: give `box.lengths` or a box in the file".into(),
+            ));
+        }
+    };
+    if with_velocities && rows.iter().any(|r| r.velocity.is_none()) {
+        return Err(err(
+            "init.velocities",
+            "the file has no velocities of the atoms (particles/velocity or velo:R:3)".into(),
+        ));
+    }
+    let mut positions = Vec::with_capacity(n_molecules);
+    let mut species = Vec::with_capacity(n_molecules);
+    let mut atoms = Vec::with_capacity(n_molecules);
+    let mut internal = Vec::with_capacity(n_molecules);
+    let mut centre_velocities = Vec::with_capacity(n_molecules);
+    let mut at = 0;
+    while at < rows.len() {
+        // The species whose atom kinds come next.
+        let fits: Vec<usize> = shapes
+            .iter()
+            .enumerate()
+            .filter(|(_, t)| {
+                rows.get(at..at + t.kinds.len())
+                    .is_some_and(|r| r.iter().zip(&t.kinds).all(|(a, k)| a.kind == *k))
+            })
+            .map(|(s, _)| s)
+            .collect();
+        let s = match fits.as_slice() {
+            [s] => *s,
+            [] => {
+                return Err(err(
+                    key,
+                    format!(
+                        "particle {at} (`{}`) starts molecule {}, but no species' atoms come \
+                         next in the file",
+                        rows[at].kind,
+                        positions.len()
+                    ),
+                ));
+            }
+            _ => {
+                return Err(err(
+                    key,
+                    format!(
+                        "molecule {} (from particle {at}) could be any of the species {}: \
+                         their atoms have the same kinds",
+                        positions.len(),
+                        fits.iter()
+                            .map(|&s| format!("`{}`", scene.species[s].name))
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ),
+                ));
+            }
+        };
+        let t = &shapes[s];
+        let mol = &rows[at..at + t.kinds.len()];
+        // Atom 0 unwrapped, the others at their nearest image of it.
+        let image = |r: &AtomRow| {
+            let im = r.image.unwrap_or([0; 3]);
+            DVec3::new(f64::from(im[0]), f64::from(im[1]), f64::from(im[2])) * lengths
+        };
+        let first = mol[0].position + image(&mol[0]);
+        let lab: Vec<DVec3> = mol
+            .iter()
+            .map(|r| {
+                let mut d = r.position - mol[0].position;
+                d -= (d / lengths).round() * lengths;
+                first + d
+            })
+            .collect();
+        let mass: f64 = t.masses.iter().sum();
+        let centre = lab
+            .iter()
+            .zip(&t.masses)
+            .map(|(x, m)| *x * *m)
+            .sum::<DVec3>()
+            / mass;
+        atoms.push(lab.iter().map(|x| *x - centre).collect());
+        if with_velocities {
+            let v: Vec<DVec3> = mol.iter().map(|r| r.velocity.expect("checked")).collect();
+            let vc = v.iter().zip(&t.masses).map(|(x, m)| *x * *m).sum::<DVec3>() / mass;
+            internal.push(v.iter().map(|x| *x - vc).collect());
+            centre_velocities.push(vc);
+        }
+        positions.push(centre);
+        species.push(s as u32);
+        at += t.kinds.len();
+    }
+    for (s, sp) in scene.species.iter().enumerate() {
+        let have = species.iter().filter(|&&x| x as usize == s).count() as u64;
+        if have != sp.count {
+            return Err(err(
+                key,
+                format!(
+                    "species `{}` has {have} molecules in the file, {} in the scene",
+                    sp.name, sp.count
+                ),
+            ));
+        }
+    }
+    let has_images = rows.iter().all(|r| r.image.is_some());
+    let motion = with_velocities.then(|| FileMotion {
+        velocities: centre_velocities,
+        omegas: None,
+        images: has_images.then(|| vec![[0; 3]; n_molecules]),
+    });
+    Ok(Some(FileMolecules {
+        config: Configuration {
+            lengths,
+            positions,
+            species,
+            lattice_spacing: None,
+        },
+        atoms,
+        internal: with_velocities.then_some(internal),
+        motion,
+    }))
 }
 
 /// The image counters of bodies that start at `positions` (as a file gives them) with the

@@ -84,7 +84,8 @@ pub fn tops_model(
     scene: &Scene,
     body_species: &[u32],
     tables: Vec<PairTable<Water>>,
-    start: Option<(Vec<glam::DQuat>, Vec<DVec3>)>,
+    attitudes: Option<Vec<glam::DQuat>>,
+    omegas: Option<Vec<DVec3>>,
 ) -> Result<Terraced<Water>, SceneError> {
     let species: Vec<BodySpecies<TopInertia>> = scene
         .species
@@ -100,7 +101,10 @@ pub fn tops_model(
         })
         .collect::<Result<_, _>>()?;
     let inertia: Vec<TopInertia> = species.iter().map(|s| s.inertia).collect();
-    let (poses, omegas) = start.unwrap_or_else(|| tops_start(scene, &inertia, body_species));
+    let (poses, omegas) = match (attitudes, omegas) {
+        (Some(q), Some(w)) => (q, w),
+        (q, _) => tops_start(scene, &inertia, body_species, q),
+    };
     Terraced::new(
         species,
         tables,
@@ -114,12 +118,12 @@ pub fn tops_model(
     .map_err(|e| SceneError::invalid("search", e.to_string()))
 }
 
-/// [`tops_model`] with a start file's attitudes when it gives the angular velocities
-/// (`omegas`, lab frame): a start file gives tops their whole attitudes.
+/// [`tops_model`] with a start file's attitudes: with its angular velocities (`omegas`, lab
+/// frame) when it gives them, or alone with `init.orientations = "file"`.
 ///
 /// # Errors
-/// As [`tops_model`], and [`SceneError::Invalid`] naming `init.velocities` for a file without
-/// attitudes.
+/// As [`tops_model`], and [`SceneError::Invalid`] naming `init.velocities` or
+/// `init.orientations` for a file without attitudes.
 pub fn tops_model_of(
     scene: &Scene,
     base: &Path,
@@ -127,18 +131,20 @@ pub fn tops_model_of(
     tables: Vec<PairTable<Water>>,
     omegas: Option<&[DVec3]>,
 ) -> Result<Terraced<Water>, SceneError> {
-    let start = match omegas {
-        Some(w) => {
-            let file = base.join(scene.init.file.as_ref().expect("checked"));
-            let n = config.positions.len();
-            Some((
-                read_attitudes(scene, &file, n, "init.velocities")?,
-                w.to_vec(),
-            ))
-        }
-        None => None,
+    let file = || base.join(scene.init.file.as_ref().expect("checked"));
+    let n = config.positions.len();
+    let attitudes = match (omegas, scene.init.orientations) {
+        (Some(_), _) => Some(read_attitudes(scene, &file(), n, "init.velocities")?),
+        (None, Orientations::File) => Some(read_attitudes(scene, &file(), n, "init.orientations")?),
+        (None, _) => None,
     };
-    tops_model(scene, &config.species, tables, start)
+    tops_model(
+        scene,
+        &config.species,
+        tables,
+        attitudes,
+        omegas.map(<[DVec3]>::to_vec),
+    )
 }
 
 /// The terraced model of a rods scene: orientations, and equipartitioned angular velocities or
@@ -195,18 +201,22 @@ pub fn rods_model<P: PairPotential>(
 }
 
 /// The attitudes (body → lab) and lab angular velocities of rigid tops at the start of a run
-/// (both engines): uniform on SO(3), or every body `ẑ` along `init.axis`; each body-frame
-/// component of `ω` Gaussian with variance `kT/I_k` (the moments of `inertia[species]`) from
-/// its own stream of the seed, all scaled to exactly `3/2 N kT`.
+/// (both engines): `attitudes` (a start file's), else uniform on SO(3), or every body `ẑ` along
+/// `init.axis`; each body-frame component of `ω` Gaussian with variance `kT/I_k` (the moments
+/// of `inertia[species]`) from its own stream of the seed, all scaled to exactly `3/2 N kT`.
 pub fn tops_start(
     scene: &Scene,
     inertia: &[TopInertia],
     body_species: &[u32],
+    attitudes: Option<Vec<glam::DQuat>>,
 ) -> (Vec<glam::DQuat>, Vec<DVec3>) {
     let n = body_species.len();
-    let poses: Vec<glam::DQuat> = match scene.init.axis {
-        Some(a) => vec![glam::DQuat::from_rotation_arc(DVec3::Z, DVec3::from(a).normalize()); n],
-        None => random_attitudes(n, scene.seed),
+    let poses: Vec<glam::DQuat> = match (attitudes, scene.init.axis) {
+        (Some(q), _) => q,
+        (None, Some(a)) => {
+            vec![glam::DQuat::from_rotation_arc(DVec3::Z, DVec3::from(a).normalize()); n]
+        }
+        (None, None) => random_attitudes(n, scene.seed),
     };
     let kt = scene.init.temperature;
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(scene.seed ^ 0x0e6a_0e6a_0000_0009);

@@ -1280,11 +1280,12 @@ impl Scene {
                      `positions = \"file\"`",
                 ));
             }
-            if self.has_sites() {
+            if self.has_sites() && !self.has_bonds() && self.init.orientations != Orientations::File
+            {
                 return Err(SceneError::invalid(
                     "init.velocities",
-                    "`file` is available for spheres, rods and tops; site molecules start \
-                     from Maxwell–Boltzmann velocities",
+                    "`file` gives site molecules the angular velocities of `init.file`, which \
+                     belong to its attitudes: set `orientations = \"file\"` too",
                 ));
             }
             if self.has_rods() && !tops && self.init.orientations != Orientations::File {
@@ -1294,11 +1295,12 @@ impl Scene {
                      to its orientations: set `orientations = \"file\"` too",
                 ));
             }
-            if tops && self.init.orientations != Orientations::Random {
+            if tops && self.init.orientations == Orientations::Aligned {
                 return Err(SceneError::invalid(
                     "init.velocities",
                     "`file` gives tops the attitudes and angular velocities of `init.file` \
-                     (its orientation and omega columns): leave `init.orientations` out",
+                     (its orientation and omega columns): leave `init.orientations` out or \
+                     set it to `file`",
                 ));
             }
         }
@@ -1839,13 +1841,6 @@ impl Scene {
                 return Err(SceneError::invalid(
                     "init.axis",
                     "only used with `orientations = \"aligned\"`",
-                ));
-            }
-            (Orientations::File, _) if tops => {
-                return Err(SceneError::invalid(
-                    "init.orientations",
-                    "a file gives one axis per body, not a top's whole attitude: use \
-                     `random` or `aligned`",
                 ));
             }
             (Orientations::File, None) if init.positions != Positions::File => {

@@ -350,14 +350,20 @@ pub(crate) fn check(scene: &Scene) -> Result<(), SceneError> {
     }
     let init = &scene.init;
     match (init.orientations, init.axis) {
-        (Orientations::File, _) => {
+        (Orientations::File, Some(_)) => {
             return Err(SceneError::invalid(
-                "init.orientations",
-                "`file` is not available for site molecules: the orientation column of an XYZ \
-                 file gives a rod's axis, not a molecule's whole attitude; use `random` or \
-                 `aligned`",
+                "init.axis",
+                "only used with `orientations = \"aligned\"`",
             ));
         }
+        (Orientations::File, None) if init.positions != Positions::File => {
+            return Err(SceneError::invalid(
+                "init.orientations",
+                "`file` reads the attitudes of `init.file` (its orientation column or \
+                 particles/orientation chunk): it needs `positions = \"file\"`",
+            ));
+        }
+        (Orientations::File, None) => {}
         (Orientations::Aligned, None) => {
             return Err(SceneError::invalid(
                 "init.axis",
@@ -609,8 +615,9 @@ fn overlap(
     None
 }
 
-/// The [`Sites`] model of a scene: attitudes (random without overlaps, or aligned), angular
-/// velocities from equipartition at the scene temperature, search settings and impulse rule.
+/// The [`Sites`] model of a scene: attitudes (a start file's `attitudes`, random without
+/// overlaps, or aligned), angular velocities (a start file's lab `omegas`, or from
+/// equipartition at the scene temperature), search settings and impulse rule.
 ///
 /// For a `resumed` run the attitudes and angular velocities drawn here are placeholders that
 /// the checkpoint's state replaces: they are drawn once, without the overlap search (the
@@ -623,6 +630,8 @@ pub fn model(
     config: &Configuration,
     plan: SitesPlan,
     resumed: bool,
+    attitudes: Option<Vec<DQuat>>,
+    omegas: Option<Vec<DVec3>>,
 ) -> Result<Sites, SceneError> {
     let n = config.positions.len();
     let kt = scene.init.temperature;
@@ -650,8 +659,12 @@ pub fn model(
         };
         let mut placed = None;
         let mut last = None;
+        let given = attitudes.as_ref().map(|q| q[i]);
+        let tries = if given.is_some() { 1 } else { tries };
         for _ in 0..tries {
-            let q = aligned.unwrap_or_else(|| random_quaternion(&mut rng));
+            let q = given
+                .or(aligned)
+                .unwrap_or_else(|| random_quaternion(&mut rng));
             let r = DMat3::from_quat(q);
             let others = if resumed { 0 } else { i };
             let hit = (0..others).find_map(|j| {
@@ -676,7 +689,7 @@ pub fn model(
                 qs.push(q);
                 mats.push(r);
             }
-            (None, Some(h)) if aligned.is_some() => {
+            (None, Some(h)) if aligned.is_some() || given.is_some() => {
                 return Err(overlap_error(config, where_, h, &plan));
             }
             (None, _) => {
@@ -693,9 +706,12 @@ pub fn model(
             }
         }
     }
-    let omegas: Vec<DVec3> = (0..n)
-        .map(|i| mats[i] * draw_body_omega(&plan.types[ty(i)], kt, &mut rng))
-        .collect();
+    let omegas: Vec<DVec3> = match omegas {
+        Some(w) => w,
+        None => (0..n)
+            .map(|i| mats[i] * draw_body_omega(&plan.types[ty(i)], kt, &mut rng))
+            .collect(),
+    };
     let rule = match scene.impulse.as_ref().map(|i| i.rule).unwrap_or_default() {
         ImpulseRuleSpec::ContactPoint => ImpulseRule::ContactPoint,
         ImpulseRuleSpec::Constrained => ImpulseRule::Constrained,

@@ -20,14 +20,14 @@ use crate::analysis::output::{
     write_csv,
 };
 use crate::config::init::{
-    Configuration, ase_momentum_unit, lattice, maxwell_boltzmann, read_motion, read_xyz,
-    rod_semi_axes,
+    Configuration, MoleculeShape, ase_momentum_unit, lattice, maxwell_boltzmann, read_attitudes,
+    read_molecules, read_motion, read_xyz, rod_semi_axes,
 };
 use crate::config::kinds::{Kind, TerracedPlan, Visit};
 use crate::config::plan::Plan;
 use crate::config::scene::{
-    AcceptKind, EnsembleKind, Positions, QueueKind, Scene, SceneError, ThermostatKind,
-    ThermostatPhase, Velocities,
+    AcceptKind, EnsembleKind, Orientations, Positions, QueueKind, Scene, SceneError,
+    ThermostatKind, ThermostatPhase, Velocities,
 };
 use crate::config::units::Units;
 use crate::driver::checkpoint::{
@@ -463,6 +463,27 @@ fn set_up<G: Go>(
     if let Some((path, c)) = &options.resume {
         check_checkpoint_scene(scene, path, c)?;
     }
+    let layout = layout_of(scene, &plan, &units);
+    let start_file = base.join(scene.init.file.as_deref().unwrap_or(Path::new("")));
+    // Semi-flexible molecules start from a file of their atoms (or of their centres).
+    let molecules = match (&options.resume, scene.init.positions, &plan) {
+        (None, Positions::File, Plan::Flexible(p)) => {
+            let shapes: Vec<MoleculeShape> = p
+                .types
+                .iter()
+                .map(|t| MoleculeShape {
+                    kinds: t
+                        .site_species()
+                        .iter()
+                        .map(|&k| p.kinds[k as usize].clone())
+                        .collect(),
+                    masses: t.masses().to_vec(),
+                })
+                .collect();
+            read_molecules(scene, &start_file, &shapes)?
+        }
+        _ => None,
+    };
     let config = match (&options.resume, scene.init.positions) {
         // Issue 9: a resumed run takes its configuration from the checkpoint.
         (Some((_, c)), _) => Configuration {
@@ -472,24 +493,38 @@ fn set_up<G: Go>(
             lattice_spacing: None,
         },
         (None, Positions::Fcc | Positions::Sc) => lattice(scene, smallest_core)?,
-        (None, Positions::File) => {
-            let file = scene.init.file.as_ref().expect("checked");
-            read_xyz(scene, &base.join(file))?
-        }
+        (None, Positions::File) => match &molecules {
+            Some(m) => m.config.clone(),
+            None => read_xyz(scene, &start_file)?,
+        },
     };
     let masses: Vec<f64> = config
         .species
         .iter()
         .map(|&s| scene.species[s as usize].mass)
         .collect();
-    // A start file's own velocities (and angular velocities of rods and tops), or
-    // Maxwell–Boltzmann ones; a resumed run takes its state from the checkpoint.
-    let rotating = matches!(plan, Plan::Terraced(_));
+    // A start file's own velocities (and angular velocities of rods, tops and site
+    // molecules), or Maxwell–Boltzmann ones; a resumed run takes its state from the checkpoint.
+    let rotating = matches!(plan, Plan::Terraced(_) | Plan::Sites(_));
+    let moments: Vec<[f64; 3]> = if rotating {
+        config
+            .species
+            .iter()
+            .map(|&s| layout.moments[s as usize])
+            .collect()
+    } else {
+        Vec::new()
+    };
     let motion = match (&options.resume, scene.init.velocities) {
-        (None, Velocities::File) => {
-            let file = base.join(scene.init.file.as_ref().expect("checked"));
-            Some(read_motion(scene, &file, &masses, rotating)?)
-        }
+        (None, Velocities::File) => match &molecules {
+            Some(m) => m.motion.clone(),
+            None => Some(read_motion(
+                scene,
+                &start_file,
+                &masses,
+                rotating.then_some(moments.as_slice()),
+            )?),
+        },
         _ => None,
     };
     let velocities = match &motion {
@@ -568,7 +603,7 @@ fn set_up<G: Go>(
         model_name: plan.name(),
         options,
         smooth: std::cell::Cell::new(None),
-        layout: layout_of(scene, &plan, &units),
+        layout,
         set_up_only,
     };
     if fault > 0.0 {
@@ -630,11 +665,19 @@ fn set_up<G: Go>(
             })
         }
         Plan::Sites(plan) => {
-            let model = crate::config::site_scene::model(scene, &config, plan, resumed)?;
+            let attitudes = match (&options.resume, scene.init.orientations) {
+                (None, Orientations::File) => {
+                    Some(read_attitudes(scene, &start_file, n, "init.orientations")?)
+                }
+                _ => None,
+            };
+            let model =
+                crate::config::site_scene::model(scene, &config, plan, resumed, attitudes, omegas)?;
             go_any_queue(&ctx, g, model)
         }
         Plan::Flexible(plan) => {
-            let model = crate::config::flexible_scene::model(scene, &config, plan, resumed)?;
+            let start = molecules.map(|m| (m.atoms, m.internal));
+            let model = crate::config::flexible_scene::model(scene, &config, plan, resumed, start)?;
             go_any_queue(&ctx, g, model)
         }
     }

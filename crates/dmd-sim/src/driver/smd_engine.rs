@@ -282,8 +282,30 @@ pub fn run_named(
     let rods = pot.is_anisotropic();
     // A start file's own velocities and angular velocities (`init.velocities = "file"`).
     let start_file = base.join(scene.init.file.as_deref().unwrap_or(Path::new("")));
+    // The principal moments of each body, for the angular momenta of a GSD file: a rod's
+    // two equal ones about its short axes, a top's about its principal axes.
+    let moments: Option<[f64; 3]> = if pot.is_rigid() {
+        let m = species.moments.expect("checked: tops have moments");
+        Some(
+            TopInertia::new(DVec3::from(m))
+                .map_err(|e| SceneError::invalid("species.moments", e))?
+                .principal()
+                .to_array(),
+        )
+    } else if rods {
+        let i = species.inertia.expect("checked: rods have inertia");
+        Some([i, i, 0.0])
+    } else {
+        None
+    };
+    let moments = moments.map(|m| vec![m; n]);
     let motion = match scene.init.velocities {
-        Velocities::File => Some(read_motion(scene, &start_file, &masses, rods)?),
+        Velocities::File => Some(read_motion(
+            scene,
+            &start_file,
+            &masses,
+            moments.as_deref(),
+        )?),
         Velocities::MaxwellBoltzmann => None,
     };
     let velocities = match &motion {
@@ -296,9 +318,13 @@ pub fn run_named(
         let moments = species.moments.expect("checked: tops have moments");
         let inertia = TopInertia::new(DVec3::from(moments))
             .map_err(|e| SceneError::invalid("species.moments", e))?;
-        let (poses, omegas) = match file_omegas {
-            Some(w) => (read_attitudes(scene, &start_file, n, "init.velocities")?, w),
-            None => tops_start(scene, &[inertia], &vec![0; n]),
+        let (poses, omegas) = match (file_omegas, scene.init.orientations) {
+            (Some(w), _) => (read_attitudes(scene, &start_file, n, "init.velocities")?, w),
+            (None, Orientations::File) => {
+                let q = read_attitudes(scene, &start_file, n, "init.orientations")?;
+                tops_start(scene, &[inertia], &vec![0; n], Some(q))
+            }
+            (None, _) => tops_start(scene, &[inertia], &vec![0; n], None),
         };
         let principal = inertia.principal();
         // L = R (I ∘ ω_body), with ω_body = R⁻¹ ω.

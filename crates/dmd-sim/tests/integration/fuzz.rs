@@ -1,7 +1,7 @@
 //! Fuzz targets that run on stable Rust: a seeded mutation loop over real inputs (the shipped
-//! scenes, the bad-scene corpus, its start files, checkpoints of real runs) for the four ways
-//! text or bytes enter `dmd` — the scene parser and checker, `--set KEY=VALUE`, the XYZ start
-//! file, the checkpoint reader with its resume checks. Mutations are those a user or a damaged
+//! scenes, the bad-scene corpus, its start files, checkpoints of real runs) for the five ways
+//! text or bytes enter `dmd` — the scene parser and checker, `--set KEY=VALUE`, the XYZ and the
+//! GSD start file, the checkpoint reader with its resume checks. Mutations are those a user or a damaged
 //! disk makes: byte flips, truncations, huge or non-finite numbers put in place of numbers,
 //! deleted, duplicated and swapped lines, lines spliced from another input.
 //!
@@ -559,7 +559,10 @@ rod 1.0 1.0 3.0 0.0 -0.1 0.0 0 0 0 1 0 1 1 1 3\n"
             match init::read_xyz(scene, &file) {
                 Ok(c) => {
                     let masses = vec![1.0; c.positions.len()];
-                    if let Err(e) = init::read_motion(scene, &file, &masses, rod_names) {
+                    let moments = vec![[1.0, 1.0, 0.0]; c.positions.len()];
+                    if let Err(e) =
+                        init::read_motion(scene, &file, &masses, rod_names.then_some(&moments[..]))
+                    {
                         messages.push(e.to_string());
                     }
                 }
@@ -576,6 +579,97 @@ rod 1.0 1.0 3.0 0.0 -0.1 0.0 0 0 0 1 0 1 1 1 3\n"
             messages.iter().try_for_each(|m| message_ok(m))
         },
     );
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+/// One to three mutations of a GSD file: flipped bits, 4-byte words set to special numbers
+/// (NaN, infinities, huge and negative values, as `f32` and as integers), or a cut-off tail.
+fn mutate_gsd(rng: &mut Rng, input: &[u8]) -> Vec<u8> {
+    let mut x = input.to_vec();
+    let specials: [u32; 9] = [
+        f32::NAN.to_bits(),
+        f32::INFINITY.to_bits(),
+        f32::MAX.to_bits(),
+        (-1.0f32).to_bits(),
+        1e30f32.to_bits(),
+        0,
+        u32::MAX,
+        7,
+        1 << 31,
+    ];
+    for _ in 0..1 + rng.below(3) {
+        let n = x.len();
+        if n < 8 {
+            break;
+        }
+        let at = rng.below(n - 4);
+        match rng.below(6) {
+            0 | 1 => x[at] ^= 1 << rng.below(8),
+            2..=4 => x[at..at + 4].copy_from_slice(&rng.pick(&specials).to_le_bytes()),
+            _ => x.truncate(at),
+        }
+    }
+    x
+}
+
+#[test]
+fn fuzz_gsd_start_file() {
+    let dir = support::scratch("fuzz-gsd");
+    let mut seeds = read_all(&corpus_dir(), "gsd");
+    // A rods' frame with every chunk a start reads, written by the `gsd` crate.
+    let rods = dir.join("rods-seed.gsd");
+    let mut w = gsd::Writer::create(&rods, "dmd").unwrap();
+    let frame = gsd::Frame {
+        sim_box: gsd::SimBox::cubic(6.0),
+        position: vec![
+            [1.0, 1.0, 1.0],
+            [-1.0, 1.0, 1.0],
+            [1.0, -1.0, 1.0],
+            [1.0, 1.0, -1.0],
+        ],
+        orientation: Some(vec![[0.5, 0.5, 0.5, 0.5]; 4]),
+        velocity: Some(vec![[0.1, 0.0, -0.1]; 4]),
+        angmom: Some(vec![[0.0, 0.01, -0.02, 0.0]; 4]),
+        image: Some(vec![[0, 1, -1]; 4]),
+        typeid: vec![0; 4],
+        types: vec!["rod".into()],
+        ..gsd::Frame::default()
+    };
+    w.append(&frame).unwrap();
+    w.finish().unwrap();
+    seeds.push(std::fs::read(&rods).unwrap());
+    let on_gsd =
+        |text: &str| Scene::from_str_with(&text.replace("start.xyz", "start.gsd"), &[]).unwrap();
+    let (spheres, rod_scene) = (on_gsd(XYZ_SPHERES), on_gsd(XYZ_RODS));
+    let mut count = 0u64;
+    fuzz("gsd", &seeds, mutate_gsd, |input| {
+        count += 1;
+        let file = dir.join("start.gsd");
+        std::fs::write(&file, input).map_err(|e| e.to_string())?;
+        // Every reader of a start file, with each scene; now and then the whole set-up.
+        let mut messages = Vec::new();
+        for scene in [&spheres, &rod_scene] {
+            match init::read_xyz(scene, &file) {
+                Ok(c) => {
+                    let masses = vec![1.0; c.positions.len()];
+                    let moments = vec![[0.007, 0.007, 0.0]; c.positions.len()];
+                    if let Err(e) = init::read_motion(scene, &file, &masses, Some(&moments)) {
+                        messages.push(e.to_string());
+                    }
+                    if let Err(e) = init::read_orientations(scene, &file, c.positions.len()) {
+                        messages.push(e.to_string());
+                    }
+                }
+                Err(e) => messages.push(e.to_string()),
+            }
+        }
+        if count.is_multiple_of(10)
+            && let Err(e) = run_scene(&spheres, &dir, None, &mut Quiet)
+        {
+            messages.push(e.to_string());
+        }
+        messages.iter().try_for_each(|m| message_ok(m))
+    });
     let _ = std::fs::remove_dir_all(dir);
 }
 

@@ -10,6 +10,7 @@ mod flexible;
 mod flexible_scenes;
 mod fuzz;
 mod gsd_output;
+mod gsd_start;
 mod hmc;
 mod layers;
 mod physics;
