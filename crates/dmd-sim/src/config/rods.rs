@@ -5,7 +5,7 @@
 //! analytic event times ([`terraced::radial_steps`](crate::models::terraced::radial_steps)), so they run on the
 //! stepped path. Potentials that depend on orientations build a
 //! [`Terraced`](crate::models::terraced::Terraced) model through their
-//! [`Kind`](crate::config::kinds::Kind): uniaxial ones on rods ([`rods_model`]), ones that read
+//! kind (`config::kinds`), on the bodies of [`Bodies`]: uniaxial ones on rods ([`rods_model`]), ones that read
 //! whole attitudes (SSD/E water) on rigid tops ([`tops_model`]), with random orientations and
 //! equipartitioned angular velocities. This module holds what the kinds share: terrace maps,
 //! search settings, starting rotations and the smooth estimators.
@@ -116,6 +116,76 @@ pub fn tops_model(
         scene.seed ^ 0x5ea2_c400_0000_0007,
     )
     .map_err(|e| SceneError::invalid("search", e.to_string()))
+}
+
+/// What the event-driven engine builds for a terraced potential besides its tables: the model
+/// with its bodies started (rods for uniaxial potentials, tops for rigid ones) and the
+/// estimator of the continuous model along the run.
+pub trait Bodies: crate::models::terraced::TerracedPotential + Sized {
+    /// The terraced model: bodies' orientations and angular velocities from the scene (or a
+    /// start file's `omegas`, lab frame).
+    ///
+    /// # Errors
+    /// [`SceneError::Invalid`] naming the key that fails.
+    fn model(
+        scene: &Scene,
+        base: &Path,
+        config: &Configuration,
+        tables: Vec<PairTable<Self>>,
+        omegas: Option<&[DVec3]>,
+    ) -> Result<Terraced<Self>, SceneError>;
+
+    /// The estimators of the continuous model along a run, or `None`.
+    ///
+    /// # Errors
+    /// [`SceneError::Invalid`] naming `output.smooth_estimators` or `smd.smoothing`.
+    fn estimator(
+        scene: &Scene,
+        lengths: DVec3,
+        tables: &[PairTable<Self>],
+    ) -> Result<Option<Box<dyn crate::analysis::smooth::Evaluate>>, SceneError>;
+}
+
+/// Uniaxial potentials act between rods.
+impl<P: PairPotential + Clone + std::fmt::Debug + Send + 'static> Bodies for P {
+    fn model(
+        scene: &Scene,
+        base: &Path,
+        config: &Configuration,
+        tables: Vec<PairTable<P>>,
+        omegas: Option<&[DVec3]>,
+    ) -> Result<Terraced<P>, SceneError> {
+        rods_model(scene, base, config, tables, omegas)
+    }
+
+    fn estimator(
+        scene: &Scene,
+        lengths: DVec3,
+        tables: &[PairTable<P>],
+    ) -> Result<Option<Box<dyn crate::analysis::smooth::Evaluate>>, SceneError> {
+        estimator(scene, lengths, tables)
+    }
+}
+
+/// SSD/E acts between rigid tops.
+impl Bodies for Water {
+    fn model(
+        scene: &Scene,
+        base: &Path,
+        config: &Configuration,
+        tables: Vec<PairTable<Water>>,
+        omegas: Option<&[DVec3]>,
+    ) -> Result<Terraced<Water>, SceneError> {
+        tops_model_of(scene, base, config, tables, omegas)
+    }
+
+    fn estimator(
+        scene: &Scene,
+        lengths: DVec3,
+        tables: &[PairTable<Water>],
+    ) -> Result<Option<Box<dyn crate::analysis::smooth::Evaluate>>, SceneError> {
+        tops_estimator(scene, lengths, tables)
+    }
 }
 
 /// [`tops_model`] with a start file's attitudes: with its angular velocities (`omegas`, lab

@@ -25,6 +25,7 @@ use crate::config::init::{
 };
 use crate::config::kinds::{Kind, TerracedPlan, Visit};
 use crate::config::plan::Plan;
+use crate::config::rods::Bodies;
 use crate::config::scene::{
     AcceptKind, EnsembleKind, Orientations, Positions, QueueKind, Scene, SceneError,
     ThermostatKind, ThermostatPhase, Velocities,
@@ -805,9 +806,13 @@ impl<G: Go> Visit for TerracedGo<'_, G> {
     fn visit<K: Kind>(self, _: &K) -> Self::Out {
         let ctx = self.ctx;
         let tables = self.plan.take::<K>();
-        ctx.smooth
-            .set(K::estimator(ctx.scene, ctx.config.lengths, &tables)?);
-        let model = K::model(ctx.scene, self.base, ctx.config, tables, self.omegas)?;
+        ctx.smooth.set(<K::Terraced as Bodies>::estimator(
+            ctx.scene,
+            ctx.config.lengths,
+            &tables,
+        )?);
+        let model =
+            <K::Terraced as Bodies>::model(ctx.scene, self.base, ctx.config, tables, self.omegas)?;
         go_any_queue(ctx, self.g, model)
     }
 }

@@ -1,20 +1,14 @@
 //! `kind = "gay-berne"`: Gay–Berne GB(κ, κ', μ, ν) rods.
 
-use std::path::Path;
-
-use glam::DVec3;
 use potential::{GayBerne, Smoothed};
 
 use super::Kind;
 use crate::analysis::output::Drawing;
-use crate::analysis::smooth::Evaluate;
-use crate::config::init::Configuration;
-use crate::config::rods::{estimator, plain_terrace_map, potential_error, rods_model};
+use crate::config::rods::{plain_terrace_map, potential_error};
 use crate::config::scene::{
-    Body, Describe, GayBerneSpec, PotentialSpec, Scene, SceneError, TerraceSpec, non_negative,
-    positive,
+    Body, Describe, GayBerneSpec, PotentialSpec, SceneError, TerraceSpec, non_negative, positive,
 };
-use crate::models::terraced::{PairTable, PairTerraces, Terraced};
+use crate::models::terraced::PairTerraces;
 
 impl GayBerneSpec {
     fn potential(&self, k: usize) -> Result<GayBerne, SceneError> {
@@ -89,24 +83,6 @@ impl Kind for GayBerneSpec {
         let map = plain_terrace_map(k, potential::PairPotential::minimum(&gb), t, kt, scale)?;
         PairTerraces::with_outer_reach(gb, map)
             .map_err(|e| SceneError::invalid(format!("pair[{k}].terraces"), e.to_string()))
-    }
-
-    fn estimator(
-        scene: &Scene,
-        lengths: DVec3,
-        tables: &[PairTable<GayBerne>],
-    ) -> Result<Option<Box<dyn Evaluate>>, SceneError> {
-        estimator(scene, lengths, tables)
-    }
-
-    fn model(
-        scene: &Scene,
-        base: &Path,
-        config: &Configuration,
-        tables: Vec<PairTable<GayBerne>>,
-        omegas: Option<&[DVec3]>,
-    ) -> Result<Terraced<GayBerne>, SceneError> {
-        rods_model(scene, base, config, tables, omegas)
     }
 
     fn smd(&self, (r_l, r_u): (f64, f64)) -> Result<Smoothed<GayBerne>, SceneError> {

@@ -1,19 +1,14 @@
 //! `kind = "lennard-jones"`: Lennard-Jones spheres, whose terraces are radial steps.
 
-use std::path::Path;
-
-use glam::DVec3;
 use potential::{LennardJones, Smoothed, profile};
 
 use super::Kind;
 use crate::analysis::output::Drawing;
-use crate::analysis::smooth::Evaluate;
-use crate::config::init::Configuration;
-use crate::config::rods::{estimator, potential_error, rods_model, terrace_error, terrace_map};
+use crate::config::rods::{potential_error, terrace_error, terrace_map};
 use crate::config::scene::{
-    Body, Describe, LennardJonesSpec, PotentialSpec, Scene, SceneError, TerraceSpec, positive,
+    Body, Describe, LennardJonesSpec, PotentialSpec, SceneError, TerraceSpec, positive,
 };
-use crate::models::terraced::{PairTable, PairTerraces, Terraced, radial_steps};
+use crate::models::terraced::{PairTerraces, radial_steps};
 
 impl LennardJonesSpec {
     fn potential(&self, k: usize) -> Result<LennardJones, SceneError> {
@@ -93,24 +88,6 @@ impl Kind for LennardJonesSpec {
         let map = terrace_map(k, &lj, Some(&prof), t, kt, scale)?;
         PairTerraces::new(lj, map)
             .map_err(|e| SceneError::invalid(format!("pair[{k}].terraces"), e.to_string()))
-    }
-
-    fn estimator(
-        scene: &Scene,
-        lengths: DVec3,
-        tables: &[PairTable<LennardJones>],
-    ) -> Result<Option<Box<dyn Evaluate>>, SceneError> {
-        estimator(scene, lengths, tables)
-    }
-
-    fn model(
-        scene: &Scene,
-        base: &Path,
-        config: &Configuration,
-        tables: Vec<PairTable<LennardJones>>,
-        omegas: Option<&[DVec3]>,
-    ) -> Result<Terraced<LennardJones>, SceneError> {
-        rods_model(scene, base, config, tables, omegas)
     }
 
     fn smd(&self, (r_l, r_u): (f64, f64)) -> Result<Smoothed<LennardJones>, SceneError> {

@@ -1,20 +1,15 @@
 //! `kind = "rods"`: the modified Lennard-Jones rods of 003 Eqs. 22–23.
 
-use std::path::Path;
-
-use glam::DVec3;
 use potential::{LjRod, Smoothed, profile};
 
 use super::Kind;
 use crate::analysis::output::Drawing;
-use crate::analysis::smooth::Evaluate;
-use crate::config::init::Configuration;
-use crate::config::rods::{estimator, potential_error, rods_model, terrace_error, terrace_map};
+use crate::config::rods::{potential_error, terrace_error, terrace_map};
 use crate::config::scene::{
-    Body, Describe, LennardJonesSpec, LjRodsSpec, PotentialSpec, Scene, SceneError, TerraceSpec,
+    Body, Describe, LennardJonesSpec, LjRodsSpec, PotentialSpec, SceneError, TerraceSpec,
     non_negative, positive,
 };
-use crate::models::terraced::{PairTable, PairTerraces, Terraced};
+use crate::models::terraced::PairTerraces;
 
 impl LjRodsSpec {
     /// Rods with `ζ = 0`: Lennard-Jones spheres.
@@ -92,24 +87,6 @@ impl Kind for LjRodsSpec {
         let map = terrace_map(k, &rod, Some(&prof), t, kt, scale)?;
         PairTerraces::new(rod, map)
             .map_err(|e| SceneError::invalid(format!("pair[{k}].terraces"), e.to_string()))
-    }
-
-    fn estimator(
-        scene: &Scene,
-        lengths: DVec3,
-        tables: &[PairTable<LjRod>],
-    ) -> Result<Option<Box<dyn Evaluate>>, SceneError> {
-        estimator(scene, lengths, tables)
-    }
-
-    fn model(
-        scene: &Scene,
-        base: &Path,
-        config: &Configuration,
-        tables: Vec<PairTable<LjRod>>,
-        omegas: Option<&[DVec3]>,
-    ) -> Result<Terraced<LjRod>, SceneError> {
-        rods_model(scene, base, config, tables, omegas)
     }
 
     fn smd(&self, (r_l, r_u): (f64, f64)) -> Result<Smoothed<LjRod>, SceneError> {

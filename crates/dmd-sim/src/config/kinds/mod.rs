@@ -21,13 +21,10 @@ mod stockmayer;
 
 use std::any::Any;
 use std::fmt::Debug;
-use std::path::Path;
 
-use crate::analysis::smooth::Evaluate;
-use crate::config::init::Configuration;
+use crate::config::rods::Bodies;
 use crate::config::scene::{Describe, PotentialSpec, Scene, SceneError, TerraceSpec};
-use crate::models::terraced::{PairTable, PairTerraces, Terraced, TerracedPotential};
-use glam::DVec3;
+use crate::models::terraced::{PairTable, PairTerraces};
 
 pub use stockmayer::Stockmayer;
 
@@ -50,8 +47,8 @@ impl PotentialSpec {
 pub trait Kind: Describe + Copy + 'static {
     /// The model name in the event-driven engine's summary.
     const MODEL: &'static str;
-    /// What the event-driven engine terraces.
-    type Terraced: TerracedPotential + Clone + Debug + Send + 'static;
+    /// What the event-driven engine terraces (and the bodies it acts between).
+    type Terraced: Bodies + Clone + Debug + Send + 'static;
     /// What the standard-MD engine integrates.
     type Smd: smd::Interaction;
 
@@ -86,29 +83,6 @@ pub trait Kind: Describe + Copy + 'static {
         kt: f64,
         scale: f64,
     ) -> Result<PairTerraces<Self::Terraced>, SceneError>;
-
-    /// The estimators of the continuous model along a run ([`Evaluate`]), or `None`.
-    ///
-    /// # Errors
-    /// [`SceneError::Invalid`] naming `output.smooth_estimators` or `smd.smoothing`.
-    fn estimator(
-        scene: &Scene,
-        lengths: DVec3,
-        tables: &[PairTable<Self::Terraced>],
-    ) -> Result<Option<Box<dyn Evaluate>>, SceneError>;
-
-    /// The terraced model: bodies' orientations and angular velocities from the scene (or a
-    /// start file's `omegas`, lab frame).
-    ///
-    /// # Errors
-    /// [`SceneError::Invalid`] naming the key that fails.
-    fn model(
-        scene: &Scene,
-        base: &Path,
-        config: &Configuration,
-        tables: Vec<PairTable<Self::Terraced>>,
-        omegas: Option<&[DVec3]>,
-    ) -> Result<Terraced<Self::Terraced>, SceneError>;
 
     /// The standard-MD force field, smoothed over `window = (r_l, r_u)` (or its own cut-off).
     ///

@@ -1,22 +1,15 @@
 //! `kind = "ssd-e"`: soft sticky dipole water, SSD/E (Fennell and Gezelter, J. Chem. Phys.
 //! 120, 9175 (2004)), between rigid tops, with its published parameters.
 
-use std::path::Path;
-
-use glam::DVec3;
 use potential::{SoftStickyDipole, SsdParameters};
 
 use super::Kind;
 use crate::analysis::output::Drawing;
-use crate::analysis::smooth::Evaluate;
-use crate::config::init::Configuration;
-use crate::config::rods::{
-    Water, plain_terrace_map, potential_error, tops_estimator, tops_model_of,
-};
+use crate::config::rods::{Water, plain_terrace_map, potential_error};
 use crate::config::scene::{
-    Body, Describe, PotentialSpec, Scene, SceneError, SsdESpec, TerraceSpec, UnitSystem,
+    Body, Describe, PotentialSpec, SceneError, SsdESpec, TerraceSpec, UnitSystem,
 };
-use crate::models::terraced::{PairTable, PairTerraces, Rigid, Terraced};
+use crate::models::terraced::{PairTerraces, Rigid};
 
 impl SsdESpec {
     /// SSD/E with its energies in internal units: `ε`, `ν₀`, `ν₀'` scaled, the dipole by
@@ -97,24 +90,6 @@ impl Kind for SsdESpec {
         let map = plain_terrace_map(k, minimum, t, kt, scale)?;
         PairTerraces::new(water, map)
             .map_err(|e| SceneError::invalid(format!("pair[{k}].terraces"), e.to_string()))
-    }
-
-    fn estimator(
-        scene: &Scene,
-        lengths: DVec3,
-        tables: &[PairTable<Water>],
-    ) -> Result<Option<Box<dyn Evaluate>>, SceneError> {
-        tops_estimator(scene, lengths, tables)
-    }
-
-    fn model(
-        scene: &Scene,
-        base: &Path,
-        config: &Configuration,
-        tables: Vec<PairTable<Water>>,
-        omegas: Option<&[DVec3]>,
-    ) -> Result<Terraced<Water>, SceneError> {
-        tops_model_of(scene, base, config, tables, omegas)
     }
 
     fn smd(&self, _: (f64, f64)) -> Result<smd::Rigid<SoftStickyDipole>, SceneError> {

@@ -11,23 +11,17 @@
 //! (`species.inertia`); the dipole is unscreened, so the terraces' zero terrace and the
 //! standard-MD engine's smoothing window end it (no Ewald sum).
 
-use std::path::Path;
-
-use glam::DVec3;
 use potential::{
     PairEval, PairGeometry, PairPotential, Partials, PotentialError, Smoothed, pair::assemble,
 };
 
 use super::Kind;
 use crate::analysis::output::Drawing;
-use crate::analysis::smooth::Evaluate;
-use crate::config::init::Configuration;
-use crate::config::rods::{estimator, plain_terrace_map, potential_error, rods_model};
+use crate::config::rods::{plain_terrace_map, potential_error};
 use crate::config::scene::{
-    Body, Describe, PotentialSpec, Scene, SceneError, StockmayerSpec, TerraceSpec, non_negative,
-    positive,
+    Body, Describe, PotentialSpec, SceneError, StockmayerSpec, TerraceSpec, non_negative, positive,
 };
-use crate::models::terraced::{PairTable, PairTerraces, Terraced};
+use crate::models::terraced::PairTerraces;
 
 /// The Stockmayer potential (module documentation).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -210,24 +204,6 @@ impl Kind for StockmayerSpec {
             .map_err(|e| SceneError::invalid(format!("pair[{k}].terraces"), e.to_string()))
     }
 
-    fn estimator(
-        scene: &Scene,
-        lengths: DVec3,
-        tables: &[PairTable<Stockmayer>],
-    ) -> Result<Option<Box<dyn Evaluate>>, SceneError> {
-        estimator(scene, lengths, tables)
-    }
-
-    fn model(
-        scene: &Scene,
-        base: &Path,
-        config: &Configuration,
-        tables: Vec<PairTable<Stockmayer>>,
-        omegas: Option<&[DVec3]>,
-    ) -> Result<Terraced<Stockmayer>, SceneError> {
-        rods_model(scene, base, config, tables, omegas)
-    }
-
     fn smd(&self, (r_l, r_u): (f64, f64)) -> Result<Smoothed<Stockmayer>, SceneError> {
         Smoothed::new(self.potential(0)?, r_l, r_u)
             .map_err(|e| SceneError::invalid("smd.smoothing", e.to_string()))
@@ -237,6 +213,7 @@ impl Kind for StockmayerSpec {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::DVec3;
 
     /// Force and torques against central differences of the energy (translation of `i`,
     /// rotation of each axis), and the head-to-tail minimum against a fine scan.
