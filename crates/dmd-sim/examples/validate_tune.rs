@@ -139,7 +139,11 @@ fn validate(args: &Args, work: &Path, r: &mut Report, out: &mut String) -> Resul
          sigma=1.0}}' --set 'pair.0.terraces={{step=0.5, core=10.0}}'` (the same ΔV = ε/2 and \
          core; an explicit step table has no step to vary). Wall times on the shared 2-core \
          machine.{}\n",
-        if args.quick { " Quick run." } else { " Full run." }
+        if args.quick {
+            " Quick run."
+        } else {
+            " Full run."
+        }
     );
     for case in cases(args.quick, work)? {
         let started = std::time::Instant::now();

@@ -246,8 +246,7 @@ pub fn knobs(scene: &Scene) -> Result<Vec<Knob>, TuneError> {
     if scene.engine == Engine::Smd {
         let dt = scene.smd.as_ref().and_then(|s| s.dt).ok_or_else(|| {
             TuneError::NoKnob(
-                "the smd engine's time step is tuned from the scene's `smd.dt`: give it"
-                    .to_owned(),
+                "the smd engine's time step is tuned from the scene's `smd.dt`: give it".to_owned(),
             )
         })?;
         knobs.push(Knob {
@@ -332,7 +331,12 @@ fn probe_overrides(
     let mut sets = Vec::new();
     let run = doc.get("run").and_then(|r| r.as_table());
     let has = |t: Option<&toml::Table>, k: &str| t.is_some_and(|t| t.contains_key(k));
-    let production = match (options.time, options.events, scene.run.time, scene.run.events) {
+    let production = match (
+        options.time,
+        options.events,
+        scene.run.time,
+        scene.run.events,
+    ) {
         (Some(t), _, _, _) => {
             if has(run, "events") {
                 sets.push("run.events=".to_owned());
@@ -686,7 +690,11 @@ impl Tuning {
                          coarser differs from it by {}).{}",
                         knob.label,
                         next.deviations.map_or("?".to_owned(), |d| {
-                            let w = if d[0].bound() >= d[1].bound() { d[0] } else { d[1] };
+                            let w = if d[0].bound() >= d[1].bound() {
+                                d[0]
+                            } else {
+                                d[1]
+                            };
                             format!("{} %", percent(w))
                         }),
                         match longer(next, self.budget) {
@@ -823,8 +831,13 @@ impl Tuning {
             .enumerate()
             .map(|(k, knob)| {
                 Line::new(
-                    format!("{} ({} … {} {})", knob.label, short(knob.value * FACTORS[0]),
-                        short(knob.value * FACTORS[FACTORS.len() - 1]), knob.unit),
+                    format!(
+                        "{} ({} … {} {})",
+                        knob.label,
+                        short(knob.value * FACTORS[0]),
+                        short(knob.value * FACTORS[FACTORS.len() - 1]),
+                        knob.unit
+                    ),
                     self.rows
                         .iter()
                         .filter(|r| r.knob == k && r.cost().is_finite())

@@ -112,7 +112,14 @@ fn tune_refuses_bad_targets_and_scenes_without_a_knob() {
     ]);
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("nothing to tune"));
-    let o = dmd(&["tune", "no-such-scene.toml", "--target", "0.02", "--out", out]);
+    let o = dmd(&[
+        "tune",
+        "no-such-scene.toml",
+        "--target",
+        "0.02",
+        "--out",
+        out,
+    ]);
     assert_eq!(o.status.code(), Some(2));
     assert!(!Path::new(out).join("tune.csv").exists());
 }
