@@ -158,14 +158,13 @@ fn validate(args: &Args, work: &Path, r: &mut Report, out: &mut String) -> Resul
         };
         let t = tune::tune(&case.scene, &options, &mut progress).map_err(|e| e.to_string())?;
         let tune_wall = started.elapsed().as_secs_f64();
-        let dir = args.figures.join(format!(
-            "tune-{}",
-            case.scene.file_stem().unwrap().to_string_lossy()
-        ));
-        t.write(&dir).map_err(|e| e.to_string())?;
+        let folder = format!("tune-{}", case.scene.file_stem().unwrap().to_string_lossy());
+        t.write(&args.figures.join(&folder))
+            .map_err(|e| e.to_string())?;
         let _ = writeln!(
             out,
-            "### {}, target {} %\n\n{}; the tune took {:.0} s of wall time.\n\n```\n{}\n{}```\n",
+            "### {}, target {} %\n\n{}; the tune took {:.0} s of wall time.\n\n```\n{}\n{}```\n\n\
+             ![dmd tune: error bound against cost](figures/{folder}/tune.svg)\n",
             case.name,
             100.0 * case.target,
             t.length,
