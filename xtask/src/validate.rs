@@ -152,6 +152,14 @@ pub(crate) const CHECKS: &[Check] = &[
         quick: &["--quick"],
     },
     Check {
+        name: "tune",
+        title: "`dmd tune` on the shipped scenes: its recommendation run for real against a finer setting",
+        package: "dmd-sim",
+        example: "validate_tune",
+        full: &[],
+        quick: &["--quick"],
+    },
+    Check {
         name: "smd",
         title: "Standard MD reference: energy against time step and cost, reversibility, stability, Lennard-Jones against its equation of state",
         package: "dmd-smd",

@@ -1028,8 +1028,8 @@ fn lennard_jones(args: &Args, r: &mut Report, w: &mut String, work: &Path) -> Re
          production. Reference: Kolafa–Nezbeda (`smd::reference`) for the full, untruncated \
          potential: U/N = {u_kn:.4}, P = {p_kn:.4}.\n\n\
          The terraced system's own ⟨V⟩/N and collision-virial P differ from the full \
-         potential's in two ways: rounding U to the nearest multiple of ΔV (an error of second \
-         order once many levels lie in the well), and the cut: beyond the reach of the \
+         potential's in two ways: rounding U to the nearest multiple of ΔV inside the well, and the \
+         cut: beyond the reach of the \
          outermost level `−ΔV/2` the pair energy is zero, a tail that shrinks only as \
          r_m⁻³ ∝ ΔV^½. Both are undone at first order by evaluating the full potential on the \
          terraced fluid's configurations through its g(r) (1000 bins to 5σ, every 0.02 τ; \

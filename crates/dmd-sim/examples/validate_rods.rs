@@ -508,15 +508,17 @@ fn terraces(args: &Args, r: &mut Report, w: &mut String, work: &Path) -> Result<
          has the same temperature) of the paper's state point: the mean potential energy per \
          rod of the terraced system and the pressure, against the cost. The smooth potential's \
          value is estimated by extrapolating the paper's rule to ΔV → 0 with a fit \
-         `a + b ΔV²` through the finest steps (rounding U to the nearest multiple of ΔV has a \
-         bias of second order). Rules at equal level count: the paper's levels (equal ΔU) or \
+         `a + b ΔV²` through the finest steps, a rough estimate: the fit assumes second-order \
+         convergence, and the measured order of the raw terraced values is lower (section \
+         \"Convergence of terraced thermodynamics with ΔV\"). Rules at equal level count: the paper's levels (equal ΔU) or \
          levels equally spaced in effective distance or in shell volume, with equal steps, \
          mid-point, shell-averaged or B₂-matched (at T) terrace energies.\n\n\
          What to expect: the paper's rule keeps `U = 0` in the middle of the zero terrace \
          `[−ΔV/2, ΔV/2)`, so the attractive tail above `−ΔV/2` counts nothing, while with equal \
          steps the deepest terrace may sit below the well's bottom (ΔV = kT: V = −4.2 kJ/mol for \
          U between −3 and −2.1). The two errors have opposite signs and can cancel at one step; \
-         the bias falls off as ΔV² only once several levels lie in the well. Rules that give each \
+         with the outermost level at `−ΔV/2` the lost tail shrinks only as the reach grows, so the \
+         raw values converge at well below second order. Rules that give each \
          terrace a value of U inside its own band remove the over-binding but keep the lost \
          tail.\n"
     )

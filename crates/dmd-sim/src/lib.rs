@@ -61,7 +61,7 @@ pub use analysis::{block, observable, output, reference, smooth};
 pub use config::{
     flexible_scene, init, kinds, limits, plan, rods, scene, site_scene, smd_spec, units,
 };
-pub use driver::{chains, checkpoint, hmc, interrupt, outdir, run, smd_engine};
+pub use driver::{chains, checkpoint, hmc, interrupt, outdir, run, smd_engine, tune};
 pub use engine::{
     body, cell, event, model, neighbour, pair_state, potential, saved, schedule, simulation, sum,
 };

@@ -103,6 +103,34 @@ enum Command {
         #[arg(long)]
         threads: Option<usize>,
     },
+    /// Find the cheapest accuracy setting of a scene within a target error: short probe runs
+    /// at 2, 1, ½ and ¼ times each accuracy knob the scene uses (terrace step ΔV, search step,
+    /// smd time step), errors of U/N and P against the finest with their error bars, cost in
+    /// CPU s per simulated time; prints a table and the `--set` lines to use, and writes
+    /// DIR/tune.csv and DIR/tune.svg.
+    Tune {
+        /// The scene file.
+        scene: PathBuf,
+        /// Target relative error of U/N and P (0.02 = 2 %).
+        #[arg(long, allow_hyphen_values = true)]
+        target: f64,
+        /// Output folder for tune.csv and tune.svg (created if missing).
+        #[arg(long, short)]
+        out: PathBuf,
+        /// Override a scene key (as for `run`), before the probes' own settings.
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+        /// The engine (as for `run`).
+        #[arg(long, value_parser = ["dmd", "smd"])]
+        engine: Option<String>,
+        /// Production time of each probe, in the scene's time unit (default: half the
+        /// scene's production; equilibration is half the scene's).
+        #[arg(long)]
+        time: Option<f64>,
+        /// Or: production events of each probe.
+        #[arg(long, conflicts_with = "time")]
+        events: Option<f64>,
+    },
     /// Read and check a scene (with its overrides) without running it, and say how many bodies
     /// it has.
     Check {
@@ -978,6 +1006,18 @@ fn main() -> ExitCode {
                 }
             }
         }
+        Command::Tune {
+            scene,
+            target,
+            out,
+            mut set,
+            engine,
+            time,
+            events,
+        } => {
+            set.extend(engine.map(|e| format!("engine={e}")));
+            tune(&scene, &out, set, target, time, events)
+        }
         Command::Resume {
             checkpoint,
             out,
@@ -989,6 +1029,55 @@ fn main() -> ExitCode {
                 resume_ensemble(&checkpoint, threads, quiet)
             } else {
                 resume(checkpoint, out, quiet, checkpoint_every)
+            }
+        }
+    }
+}
+
+/// `dmd tune`: the probes with a progress line on stderr, the table, the recommendation.
+fn tune(
+    scene: &Path,
+    out: &Path,
+    overrides: Vec<String>,
+    target: f64,
+    time: Option<f64>,
+    events: Option<f64>,
+) -> ExitCode {
+    use dmd_sim::tune;
+    let options = tune::TuneOptions {
+        target,
+        overrides,
+        time,
+        events,
+    };
+    let started = std::time::Instant::now();
+    let mut progress = |done: usize, total: usize, what: &str| {
+        eprintln!(
+            "dmd tune: [{done}/{total}] {} {what}",
+            duration(started.elapsed().as_secs_f64())
+        );
+    };
+    let result = tune::tune(scene, &options, &mut progress).and_then(|t| {
+        let files = t.write(out)?;
+        Ok((t, files))
+    });
+    match result {
+        Ok((t, files)) => {
+            println!("dmd tune {}: {}", scene.display(), t.length);
+            print!("{}", t.table());
+            println!();
+            print!("{}", t.recommendation());
+            for f in files {
+                println!("wrote {}", f.display());
+            }
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("dmd tune: {}: {e}", scene.display());
+            if e.is_input() {
+                ExitCode::from(2)
+            } else {
+                ExitCode::FAILURE
             }
         }
     }

@@ -9,3 +9,4 @@ pub mod outdir;
 pub(crate) mod reporting;
 pub mod run;
 pub mod smd_engine;
+pub mod tune;

@@ -27,4 +27,5 @@ mod support;
 mod terminal;
 mod tops;
 mod trajectory_tools;
+mod tune;
 mod water_smd;

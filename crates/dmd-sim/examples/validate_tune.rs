@@ -1,0 +1,221 @@
+//! `cargo xtask validate --only tune`: `dmd tune` on the shipped scenes, and its
+//! recommendation run for real.
+//!
+//! For each case, `tune::tune` with its default probes; then the recommended settings of all
+//! knobs together and a finer reference (every knob at half its finest probed value, one step
+//! beyond what the tune could see) are each run at the scene's full length, and the relative
+//! differences of U/N and P (scaled as the tune scales them) are checked against the target.
+//! `--quick`: the reduced rods of the integration tests (N = 216, so that the finer reference's reach fits the box) with short probes and a loose target.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use dmd_sim::run::{Quiet, run_scene};
+use dmd_sim::scene::Scene;
+use dmd_sim::tune::{self, FACTORS, TuneOptions};
+
+mod common;
+use common::{Args, Report};
+
+/// One tuned scene.
+struct Case {
+    name: &'static str,
+    scene: PathBuf,
+    overrides: Vec<String>,
+    target: f64,
+    /// Probe production length (`None`: the tune's default).
+    time: Option<f64>,
+    /// Overrides of the long runs' length (`[]`: the scene's).
+    long: Vec<String>,
+}
+
+fn scenes() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes")
+}
+
+/// The explicit step table of `stepped-lj.toml` given as the Lennard-Jones potential on
+/// terraces of the same ΔV = ε/2 and core at 10ε, so that `dmd tune` has a step to vary.
+fn stepped_lj_as_terraces() -> Vec<String> {
+    vec![
+        "pair.0.steps=".to_owned(),
+        r#"pair.0.potential={kind="lennard-jones", epsilon=1.0, sigma=1.0}"#.to_owned(),
+        "pair.0.terraces={step=0.5, core=10.0}".to_owned(),
+    ]
+}
+
+fn cases(quick: bool, work: &Path) -> Result<Vec<Case>, String> {
+    if quick {
+        std::fs::create_dir_all(work).map_err(|e| e.to_string())?;
+        let path = work.join("rods.toml");
+        std::fs::write(&path, QUICK_RODS).map_err(|e| e.to_string())?;
+        return Ok(vec![Case {
+            name: "reduced rods (N = 216)",
+            scene: path,
+            overrides: Vec::new(),
+            target: 0.5,
+            time: Some(0.2),
+            long: vec!["run.time=1.0".to_owned()],
+        }]);
+    }
+    Ok(vec![
+        Case {
+            name: "scenes/rods-paper.toml",
+            scene: scenes().join("rods-paper.toml"),
+            overrides: Vec::new(),
+            target: 0.02,
+            time: None,
+            long: Vec::new(),
+        },
+        Case {
+            name: "scenes/stepped-lj.toml (as terraces)",
+            scene: scenes().join("stepped-lj.toml"),
+            overrides: stepped_lj_as_terraces(),
+            target: 0.01,
+            time: None,
+            long: Vec::new(),
+        },
+    ])
+}
+
+/// The reduced rods of the integration tests, 216 of them, with a search step and sampling.
+const QUICK_RODS: &str = r#"
+version = 1
+seed = 3
+[box]
+density = 0.5
+[[species]]
+name = "rod"
+count = 216
+mass = 1.0
+inertia = 0.00696
+[[pair]]
+species = ["rod", "rod"]
+potential = { kind = "rods", epsilon = 1.0, sigma = 1.0, zeta = 0.3295 }
+terraces = { step_kt = 0.5 }
+[init]
+positions = "sc"
+temperature = 1.4
+[thermostat]
+kind = "andersen"
+rate = 2.0
+[run]
+equilibration_time = 0.5
+time = 0.5
+[search]
+max_step = 0.01
+window = 0.01
+[output]
+sample_interval = 0.01
+"#;
+
+/// U/N, P (with errors), ρkT and CPU seconds of a run of `scene` with `sets`.
+fn long_run(case: &Case, sets: &[String]) -> Result<[f64; 6], String> {
+    let mut all = case.overrides.clone();
+    all.extend(case.long.iter().cloned());
+    all.extend(sets.iter().cloned());
+    let (scene, base) = Scene::load(&case.scene, &all).map_err(|e| e.to_string())?;
+    let s = run_scene(&scene, &base, None, &mut Quiet).map_err(|e| e.to_string())?;
+    Ok([
+        s.potential_energy_per_body,
+        s.potential_energy_per_body_error.unwrap_or(f64::NAN),
+        s.pressure,
+        s.pressure_error.unwrap_or(f64::NAN),
+        s.pressure_ideal,
+        s.cpu_seconds,
+    ])
+}
+
+fn validate(args: &Args, work: &Path, r: &mut Report, out: &mut String) -> Result<(), String> {
+    let _ = writeln!(
+        out,
+        "`dmd tune` with its default probes (the knob's scene value times {FACTORS:?}, probe \
+         production half the scene's, equilibration half the scene's), then two runs at the \
+         scene's full length: every knob at its recommended value, and every knob at half its \
+         finest probed value (a reference finer than any the tune saw). Check: U/N and P of the \
+         recommended run within the target of the finer reference, relative to |U/N| and to \
+         max(|P|, ρkT) as the tune measures them. `stepped-lj.toml` is tuned through \
+         `--set pair.0.steps= --set 'pair.0.potential={{kind=\"lennard-jones\", epsilon=1.0, \
+         sigma=1.0}}' --set 'pair.0.terraces={{step=0.5, core=10.0}}'` (the same ΔV = ε/2 and \
+         core; an explicit step table has no step to vary). Wall times on the shared 2-core \
+         machine.{}\n",
+        if args.quick {
+            " Quick run."
+        } else {
+            " Full run."
+        }
+    );
+    for case in cases(args.quick, work)? {
+        let started = std::time::Instant::now();
+        let options = TuneOptions {
+            target: case.target,
+            overrides: case.overrides.clone(),
+            time: case.time,
+            events: None,
+        };
+        let mut progress = |done: usize, total: usize, what: &str| {
+            eprintln!("validate_tune: {}: [{done}/{total}] {what}", case.name);
+        };
+        let t = tune::tune(&case.scene, &options, &mut progress).map_err(|e| e.to_string())?;
+        let tune_wall = started.elapsed().as_secs_f64();
+        let folder = format!("tune-{}", case.scene.file_stem().unwrap().to_string_lossy());
+        t.write(&args.figures.join(&folder))
+            .map_err(|e| e.to_string())?;
+        let _ = writeln!(
+            out,
+            "### {}, target {} %\n\n{}; the tune took {:.0} s of wall time.\n\n```\n{}\n{}```\n\n\
+             ![dmd tune: error bound against cost](figures/{folder}/tune.svg)\n",
+            case.name,
+            100.0 * case.target,
+            t.length,
+            tune_wall,
+            t.table().trim_end(),
+            t.recommendation()
+        );
+        let recommended = t.recommended_sets();
+        let finer: Vec<String> = t
+            .knobs
+            .iter()
+            .flat_map(|k| k.sets(0.5 * k.value * FACTORS[FACTORS.len() - 1]))
+            .collect();
+        eprintln!("validate_tune: {}: long runs", case.name);
+        let a = long_run(&case, &recommended)?;
+        let b = long_run(&case, &finer)?;
+        let scales = [b[0].abs(), b[2].abs().max(b[4].abs())];
+        let _ = writeln!(
+            out,
+            "Recommended (`{}`) against the finer reference (`{}`), full-length runs:\n\n\
+             | quantity | recommended | finer reference | relative difference | target | check |\n\
+             |---|---|---|---|---|---|",
+            recommended.join(" "),
+            finer.join(" ")
+        );
+        for (k, name) in [(0usize, "U/N"), (2, "P")] {
+            let d = (a[k] - b[k]).abs() / scales[k / 2];
+            let u = a[k + 1].hypot(b[k + 1]) / scales[k / 2];
+            let ok = d <= case.target;
+            let _ = writeln!(
+                out,
+                "| {name} | {:.4} ± {:.4} | {:.4} ± {:.4} | {:.2} ± {:.2} % | {} % | {} |",
+                a[k],
+                a[k + 1],
+                b[k],
+                b[k + 1],
+                100.0 * d,
+                100.0 * u,
+                100.0 * case.target,
+                r.check(ok)
+            );
+        }
+        let _ = writeln!(
+            out,
+            "\nCPU s of production: recommended {:.1}, finer reference {:.1}.\n",
+            a[5], b[5]
+        );
+    }
+    Ok(())
+}
+
+fn main() -> ExitCode {
+    common::main_of("validate_tune", validate)
+}

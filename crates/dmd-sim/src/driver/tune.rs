@@ -1,0 +1,995 @@
+//! `dmd tune`: which accuracy setting of a scene buys a target error cheapest.
+//!
+//! For each accuracy knob the scene uses (the terrace step ΔV of every terraced pair, the
+//! search step of a root-searched model, the smd engine's time step), short probe runs of the
+//! scene at the knob's value times 2, 1, ½ and ¼, the other knobs at the scene's values. Each
+//! probe is an ordinary run ([`run_scene`] or [`smd_engine::run`]) with `--set` overrides for
+//! the knob and a shortened length. The error of a probe is its difference from the finest
+//! probe of the same knob in the potential energy per body and the pressure, relative to a
+//! scale (|U/N| of the finest probe; for P the larger of |P| and ρkT, since P may be near
+//! zero), with the uncertainty of that difference from the two runs' own block-average errors
+//! (`_error` of the summary) in quadrature. A setting qualifies when `error + uncertainty` is
+//! within the target. The recommended value of each knob is its cheapest qualifying one, by CPU
+//! seconds of production per unit of simulated time. Knobs are judged one at a time; whether
+//! their recommended values together meet the target is what `cargo xtask validate --only
+//! tune` checks on the shipped scenes.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use crate::analysis::output::{Line, OutputError, Plot, write_atomically, write_plot};
+use crate::config::scene::{Scene, SceneError};
+use crate::config::units::UnitNames;
+use crate::driver::reporting::{Quiet, RunError};
+use crate::driver::run::run_scene;
+use crate::driver::smd_engine::{self, Engine};
+
+/// The multiples of a knob's scene value that are probed, coarsest first; the last is the
+/// reference.
+pub const FACTORS: [f64; 4] = [2.0, 1.0, 0.5, 0.25];
+
+/// Default probe production length, as a fraction of the scene's.
+pub const PRODUCTION_FRACTION: f64 = 0.5;
+
+/// Default probe equilibration length, as a fraction of the scene's.
+pub const EQUILIBRATION_FRACTION: f64 = 0.5;
+
+/// Why `dmd tune` cannot run.
+#[derive(Debug, thiserror::Error)]
+pub enum TuneError {
+    /// The scene (with its overrides) is not acceptable.
+    #[error(transparent)]
+    Scene(#[from] SceneError),
+    /// A command-line value is not acceptable.
+    #[error("{option}: {problem}")]
+    Option {
+        /// The option (`--target`).
+        option: &'static str,
+        /// What is wrong.
+        problem: String,
+    },
+    /// The scene has no accuracy knob that `dmd tune` varies.
+    #[error("nothing to tune: {0}")]
+    NoKnob(String),
+    /// A reference probe (the finest setting of a knob) failed.
+    #[error("the reference probe {setting} failed: {source}")]
+    Reference {
+        /// The `--set` line of the probe.
+        setting: String,
+        /// Why.
+        source: RunError,
+    },
+    /// The table or the plot could not be written.
+    #[error(transparent)]
+    Output(#[from] OutputError),
+}
+
+impl TuneError {
+    /// Whether the user's input is at fault (exit status 2), not the run.
+    pub fn is_input(&self) -> bool {
+        matches!(
+            self,
+            TuneError::Scene(_) | TuneError::Option { .. } | TuneError::NoKnob(_)
+        ) || matches!(
+            self,
+            TuneError::Reference {
+                source: RunError::Scene(_),
+                ..
+            }
+        )
+    }
+}
+
+/// What `dmd tune` is asked.
+#[derive(Clone, Debug, Default)]
+pub struct TuneOptions {
+    /// Target relative error (0.02 = 2 %).
+    pub target: f64,
+    /// The user's `--set` overrides (and `engine=…`), applied before the probes' own.
+    pub overrides: Vec<String>,
+    /// Probe production time (the scene's time unit); default half the scene's
+    /// production.
+    pub time: Option<f64>,
+    /// Or: probe production events.
+    pub events: Option<f64>,
+}
+
+/// One accuracy knob of a scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Knob {
+    /// The scene key varied (`pair.0.terraces.step_kt`).
+    pub key: String,
+    /// Keys set to the same value with it (the search window when it equals the step).
+    pub linked: Vec<String>,
+    /// What it is, for people (`ΔV of pair 0`).
+    pub label: String,
+    /// Its unit (`kT`, `ps`).
+    pub unit: String,
+    /// The scene's value.
+    pub value: f64,
+}
+
+impl Knob {
+    /// The `--set` lines that give the knob `value`.
+    pub fn sets(&self, value: f64) -> Vec<String> {
+        std::iter::once(&self.key)
+            .chain(&self.linked)
+            .map(|k| format!("{k}={value}"))
+            .collect()
+    }
+}
+
+/// A mean with its standard error.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Measured {
+    /// The mean.
+    pub value: f64,
+    /// Its standard error (NaN when the run gave none).
+    pub error: f64,
+}
+
+/// What one probe run measured.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Probe {
+    /// Potential energy per body (energy unit).
+    pub energy: Measured,
+    /// Pressure (pressure unit).
+    pub pressure: Measured,
+    /// ρkT of the run (pressure unit): the scale of pressure errors when |P| is smaller.
+    pub pressure_ideal: f64,
+    /// Self-diffusion coefficient from the MSD, if the scene measures it (shown, not used to
+    /// select: short probes leave it too noisy).
+    pub diffusion: Option<Measured>,
+    /// CPU seconds of production per unit of simulated time.
+    pub cost: f64,
+}
+
+/// The error of a probe against its knob's reference.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Deviation {
+    /// `|x − x_ref| / scale`.
+    pub error: f64,
+    /// The standard error of that difference, `√(σ² + σ_ref²) / scale`.
+    pub uncertainty: f64,
+}
+
+impl Deviation {
+    /// The deviation of `x` from `reference` relative to `scale`; zero for the reference
+    /// itself.
+    pub fn of(x: Measured, reference: Measured, scale: f64, is_reference: bool) -> Self {
+        if is_reference {
+            return Deviation {
+                error: 0.0,
+                uncertainty: 0.0,
+            };
+        }
+        Deviation {
+            error: (x.value - reference.value).abs() / scale,
+            uncertainty: x.error.hypot(reference.error) / scale,
+        }
+    }
+
+    /// The error bound `error + uncertainty` (NaN when unknown).
+    pub fn bound(&self) -> f64 {
+        self.error + self.uncertainty
+    }
+}
+
+/// One row of the table: a knob at one value.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Row {
+    /// Index of the knob in [`Tuning::knobs`].
+    pub knob: usize,
+    /// The value probed.
+    pub value: f64,
+    /// The measurement, or why the probe failed.
+    pub probe: Result<Probe, String>,
+    /// Deviation of U/N and of P from the knob's reference (none for a failed probe).
+    pub deviations: Option<[Deviation; 2]>,
+}
+
+impl Row {
+    /// The largest error bound of the selecting observables (infinite for a failed probe).
+    pub fn bound(&self) -> f64 {
+        // `f64::max` would drop a NaN: an unknown bound must disqualify.
+        self.deviations.map_or(f64::INFINITY, |d| {
+            d.iter()
+                .map(|d| d.bound())
+                .map(|b| if b.is_nan() { f64::INFINITY } else { b })
+                .fold(0.0, f64::max)
+        })
+    }
+
+    /// CPU seconds per unit of simulated time (infinite for a failed probe).
+    pub fn cost(&self) -> f64 {
+        self.probe.as_ref().map_or(f64::INFINITY, |p| p.cost)
+    }
+}
+
+/// The result of `dmd tune`.
+#[derive(Clone, Debug)]
+pub struct Tuning {
+    /// The knobs, in the order of the table.
+    pub knobs: Vec<Knob>,
+    /// Every probe, knob by knob, coarsest first.
+    pub rows: Vec<Row>,
+    /// The target relative error.
+    pub target: f64,
+    /// What each knob's error bound may be: the target (knobs are probed one at a time, each
+    /// with the others at the scene's values).
+    pub budget: f64,
+    /// The recommended row of each knob (index into `rows`), none if no probe qualified.
+    pub recommended: Vec<Option<usize>>,
+    /// Unit names of the scene.
+    pub units: &'static UnitNames,
+    /// The probe length, for people (`5 ps of production after 5 ps of equilibration`).
+    pub length: String,
+}
+
+/// The cheapest row (by [`Row::cost`]) among `rows` whose bound is within `budget`; among
+/// equally cheap rows the first. `None` if none qualifies.
+pub fn cheapest_within(rows: &[&Row], budget: f64) -> Option<usize> {
+    rows.iter()
+        .enumerate()
+        .filter(|(_, r)| r.bound() <= budget && r.cost().is_finite())
+        .min_by(|a, b| a.1.cost().total_cmp(&b.1.cost()))
+        .map(|(k, _)| k)
+}
+
+/// The accuracy knobs of a scene that `dmd tune` varies.
+///
+/// # Errors
+/// [`TuneError::NoKnob`] saying why there is none.
+pub fn knobs(scene: &Scene) -> Result<Vec<Knob>, TuneError> {
+    let names = UnitNames::of(scene.units);
+    let mut knobs = Vec::new();
+    if scene.engine == Engine::Smd {
+        let dt = scene.smd.as_ref().and_then(|s| s.dt).ok_or_else(|| {
+            TuneError::NoKnob(
+                "the smd engine's time step is tuned from the scene's `smd.dt`: give it".to_owned(),
+            )
+        })?;
+        knobs.push(Knob {
+            key: "smd.dt".to_owned(),
+            linked: Vec::new(),
+            label: "smd time step".to_owned(),
+            unit: names.time.to_owned(),
+            value: dt,
+        });
+        return Ok(knobs);
+    }
+    let mut stepped = Vec::new();
+    for (k, p) in scene.pair.iter().enumerate() {
+        match (&p.potential, &p.terraces) {
+            (Some(_), Some(t)) => {
+                let (key, unit, value) = match (t.step_kt, t.step) {
+                    (Some(v), _) => ("step_kt", "kT".to_owned(), v),
+                    (None, Some(v)) => ("step", names.energy.to_owned(), v),
+                    // Explicit levels: no single step to scale.
+                    (None, None) => continue,
+                };
+                knobs.push(Knob {
+                    key: format!("pair.{k}.terraces.{key}"),
+                    linked: Vec::new(),
+                    label: format!("ΔV of pair {k}"),
+                    unit,
+                    value,
+                });
+            }
+            _ if !p.steps.is_empty() && p.steps.iter().any(|s| s[1].is_finite()) => {
+                stepped.push(k);
+            }
+            _ => {}
+        }
+    }
+    let searched = scene
+        .pair
+        .iter()
+        .any(|p| p.potential.is_some_and(|q| q.is_anisotropic()));
+    if let Some(s) = scene.search.as_ref().filter(|_| searched)
+        && let Some(step) = s.max_step
+    {
+        knobs.push(Knob {
+            key: "search.max_step".to_owned(),
+            linked: if s.window == Some(step) {
+                vec!["search.window".to_owned()]
+            } else {
+                Vec::new()
+            },
+            label: "search step".to_owned(),
+            unit: names.time.to_owned(),
+            value: step,
+        });
+    }
+    if knobs.is_empty() {
+        let why = if let Some(k) = stepped.first() {
+            format!(
+                "pair[{k}] is an explicit step table (`steps`), which has no step to refine; give \
+                 the smooth potential and its terraces instead (`pair.{k}.potential`, \
+                 `pair.{k}.terraces`; `dmd tune` varies `terraces.step_kt` or `terraces.step`)"
+            )
+        } else {
+            "the scene has no terraced potential (`pair.K.terraces.step_kt` or `step`), no \
+             `search.max_step` of a searched potential and no smd `smd.dt`: its dynamics have no \
+             discretisation error to trade against cost"
+                .to_owned()
+        };
+        return Err(TuneError::NoKnob(why));
+    }
+    Ok(knobs)
+}
+
+/// The `--set` lines that shorten a probe: `options.time` or `events`, else a fraction of the
+/// scene's lengths; outputs a probe does not use (trajectories, g(r), correlations other
+/// than the MSD, the series) are dropped.
+fn probe_overrides(
+    doc: &toml::Table,
+    scene: &Scene,
+    options: &TuneOptions,
+) -> (Vec<String>, String) {
+    let names = UnitNames::of(scene.units);
+    let mut sets = Vec::new();
+    let run = doc.get("run").and_then(|r| r.as_table());
+    let has = |t: Option<&toml::Table>, k: &str| t.is_some_and(|t| t.contains_key(k));
+    let production = match (
+        options.time,
+        options.events,
+        scene.run.time,
+        scene.run.events,
+    ) {
+        (Some(t), _, _, _) => {
+            if has(run, "events") {
+                sets.push("run.events=".to_owned());
+            }
+            sets.push(format!("run.time={t}"));
+            format!("{t} {}", names.time)
+        }
+        (None, Some(n), _, _) => {
+            if has(run, "time") {
+                sets.push("run.time=".to_owned());
+            }
+            sets.push(format!("run.events={}", n.round()));
+            format!("{n:.3e} events")
+        }
+        (None, None, Some(t), _) => {
+            let t = t * PRODUCTION_FRACTION;
+            sets.push(format!("run.time={t}"));
+            format!("{t} {}", names.time)
+        }
+        (None, None, None, Some(n)) => {
+            let n = (n as f64 * PRODUCTION_FRACTION).round();
+            sets.push(format!("run.events={n}"));
+            format!("{n:.3e} events")
+        }
+        (None, None, None, None) => "the scene's length".to_owned(),
+    };
+    let equilibration = if let Some(t) = scene.run.equilibration_time {
+        let t = t * EQUILIBRATION_FRACTION;
+        sets.push(format!("run.equilibration_time={t}"));
+        format!("{t} {}", names.time)
+    } else if scene.run.equilibration_events > 0 {
+        let n = (scene.run.equilibration_events as f64 * EQUILIBRATION_FRACTION).round();
+        sets.push(format!("run.equilibration_events={n}"));
+        format!("{n:.3e} events")
+    } else {
+        "none".to_owned()
+    };
+    let output = doc.get("output").and_then(|o| o.as_table());
+    for k in ["trajectory", "gsd", "rdf", "vacf", "orientation_acf"] {
+        if has(output, k) {
+            sets.push(format!("output.{k}="));
+        }
+    }
+    if has(output, "series") {
+        sets.push("output.series=false".to_owned());
+    }
+    (
+        sets,
+        format!("probes of {production} of production after {equilibration} of equilibration"),
+    )
+}
+
+/// Runs one probe of `text` (the scene file's text) with `overrides`.
+fn probe(text: &str, base: &Path, overrides: &[String]) -> Result<Probe, RunError> {
+    let scene = Scene::from_str_with(text, overrides)?;
+    let m = |value: f64, error: Option<f64>| Measured {
+        value,
+        error: error.unwrap_or(f64::NAN),
+    };
+    if scene.engine == Engine::Smd {
+        let s = smd_engine::run(&scene, base, None)?;
+        let ideal = if s.compressibility != 0.0 {
+            s.pressure / s.compressibility
+        } else {
+            f64::NAN
+        };
+        return Ok(Probe {
+            energy: m(
+                s.potential_energy_per_body,
+                Some(s.potential_energy_per_body_error),
+            ),
+            pressure: m(s.pressure, Some(s.pressure_error)),
+            pressure_ideal: ideal,
+            diffusion: s.diffusion_msd.map(|d| m(d, s.diffusion_msd_error)),
+            cost: s.cpu_seconds / s.sim_time,
+        });
+    }
+    let s = run_scene(&scene, base, None, &mut Quiet)?;
+    Ok(Probe {
+        energy: m(
+            s.potential_energy_per_body,
+            s.potential_energy_per_body_error,
+        ),
+        pressure: m(s.pressure, s.pressure_error),
+        pressure_ideal: s.pressure_ideal,
+        diffusion: s.diffusion_msd.map(|d| m(d, s.diffusion_msd_error)),
+        cost: s.cpu_seconds / s.sim_time,
+    })
+}
+
+/// Fills in the deviations of the rows of knob `knob` (its last row is the reference) and
+/// returns its recommended row.
+fn judge(rows: &mut [Row], budget: f64) -> Option<usize> {
+    let Some(Ok(reference)) = rows.last().map(|r| r.probe.clone()) else {
+        return None;
+    };
+    let n = rows.len();
+    for (k, row) in rows.iter_mut().enumerate() {
+        if let Ok(p) = &row.probe {
+            let is_ref = k + 1 == n;
+            let u_scale = reference.energy.value.abs();
+            let p_scale = reference
+                .pressure
+                .value
+                .abs()
+                .max(reference.pressure_ideal.abs());
+            row.deviations = Some([
+                Deviation::of(p.energy, reference.energy, u_scale, is_ref),
+                Deviation::of(p.pressure, reference.pressure, p_scale, is_ref),
+            ]);
+        }
+    }
+    let refs: Vec<&Row> = rows.iter().collect();
+    cheapest_within(&refs, budget)
+}
+
+/// Tunes the scene at `path`: runs the probes (reporting each through `progress` as
+/// `(done, total, what)` before it starts) and judges them.
+///
+/// # Errors
+/// [`TuneError`]: bad options or scene, no knob, a failed reference probe.
+pub fn tune(
+    path: &Path,
+    options: &TuneOptions,
+    progress: &mut dyn FnMut(usize, usize, &str),
+) -> Result<Tuning, TuneError> {
+    if !(options.target.is_finite() && options.target > 0.0) {
+        return Err(TuneError::Option {
+            option: "--target",
+            problem: format!(
+                "{} is not a relative error: give a positive number such as 0.02 (2 %)",
+                options.target
+            ),
+        });
+    }
+    for (option, v) in [("--time", options.time), ("--events", options.events)] {
+        if let Some(v) = v
+            && !(v.is_finite() && v > 0.0)
+        {
+            return Err(TuneError::Option {
+                option,
+                problem: format!("{v} is not a positive length"),
+            });
+        }
+    }
+    let (scene, base) = Scene::load(path, &options.overrides)?;
+    if scene.chains.is_some() || scene.sweep.is_some() || scene.hmc.is_some() {
+        return Err(TuneError::NoKnob(
+            "scenes of `[chains]`, `[sweep]` or `[hmc]` are not tuned: tune the plain scene"
+                .to_owned(),
+        ));
+    }
+    let knobs = knobs(&scene)?;
+    let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+        path: path.to_owned(),
+        source,
+    })?;
+    let mut doc: toml::Table = text
+        .parse()
+        .map_err(|e: toml::de::Error| SceneError::Syntax(e.to_string()))?;
+    for o in &options.overrides {
+        Scene::apply_override(&mut doc, o)?;
+    }
+    let (shorten, length) = probe_overrides(&doc, &scene, options);
+    // Every probe's scene is checked before the first runs.
+    let mut plan: Vec<(usize, f64, Vec<String>)> = Vec::new();
+    for (k, knob) in knobs.iter().enumerate() {
+        for f in FACTORS {
+            let value = knob.value * f;
+            let mut sets = options.overrides.clone();
+            sets.extend(shorten.iter().cloned());
+            sets.extend(knob.sets(value));
+            Scene::from_str_with(&text, &sets)?;
+            plan.push((k, value, sets));
+        }
+    }
+    // The scene's own setting is the same probe for every knob: run it once.
+    let mut done: Vec<(Vec<String>, Result<Probe, String>)> = Vec::new();
+    let total = plan.len() - (knobs.len() - 1);
+    let mut rows = Vec::new();
+    for (k, value, sets) in plan {
+        let knob = &knobs[k];
+        let is_scene = (value - knob.value).abs() <= 1e-12 * knob.value.abs();
+        let shared = if is_scene {
+            done.iter()
+                .find(|(s, _)| s.is_empty())
+                .map(|(_, p)| p.clone())
+        } else {
+            None
+        };
+        let result = match shared {
+            Some(p) => p,
+            None => {
+                let what = format!("{} = {} {}", knob.key, short(value), knob.unit);
+                progress(done.len(), total, &what);
+                let r = probe(&text, &base, &sets);
+                let is_ref = value == knob.value * FACTORS[FACTORS.len() - 1];
+                let r = match r {
+                    Err(e) if is_ref => {
+                        return Err(TuneError::Reference {
+                            setting: what,
+                            source: e,
+                        });
+                    }
+                    r => r.map_err(|e| e.to_string()),
+                };
+                done.push((if is_scene { Vec::new() } else { sets }, r.clone()));
+                r
+            }
+        };
+        rows.push(Row {
+            knob: k,
+            value,
+            probe: result,
+            deviations: None,
+        });
+    }
+    progress(total, total, "done");
+    let budget = options.target;
+    let mut recommended = Vec::new();
+    for (k, chunk) in rows.chunks_mut(FACTORS.len()).enumerate() {
+        recommended.push(judge(chunk, budget).map(|r| k * FACTORS.len() + r));
+    }
+    Ok(Tuning {
+        knobs,
+        rows,
+        target: options.target,
+        budget,
+        recommended,
+        units: UnitNames::of(scene.units),
+        length,
+    })
+}
+
+/// How many times longer the probes of `row` and its reference would have to be for its
+/// error bound to fall within `budget`, if its difference alone is within it (errors shrink as
+/// the square root of the length); `None` if it already qualifies or its difference does not.
+pub fn longer(row: &Row, budget: f64) -> Option<f64> {
+    let d = row.deviations?;
+    let mut factor: f64 = 1.0;
+    for d in d {
+        if d.bound() <= budget {
+            continue;
+        }
+        if d.error >= budget || d.uncertainty.is_nan() {
+            return None;
+        }
+        factor = factor.max((d.uncertainty / (budget - d.error)).powi(2));
+    }
+    (factor > 1.0).then_some(factor)
+}
+
+/// `x` with up to 4 significant digits, as a scene would give it.
+fn short(x: f64) -> String {
+    let s = format!("{x:.4e}");
+    match s.parse::<f64>() {
+        Ok(v) if (1e-3..1e5).contains(&v.abs()) => {
+            let t = format!("{v:.6}");
+            t.trim_end_matches('0').trim_end_matches('.').to_owned()
+        }
+        Ok(v) => format!("{v:e}"),
+        Err(_) => s,
+    }
+}
+
+/// `m ± e` with the error to two significant digits.
+fn pm(m: Measured) -> String {
+    if m.error.is_finite() && m.error > 0.0 {
+        let d = (1 - m.error.log10().floor() as i32).max(0) as usize;
+        format!("{:.d$} ± {:.d$}", m.value, m.error)
+    } else {
+        format!("{:.4}", m.value)
+    }
+}
+
+/// A relative deviation in per cent, `e ± u %`.
+fn percent(d: Deviation) -> String {
+    format!("{:.2} ± {:.2}", 100.0 * d.error, 100.0 * d.uncertainty)
+}
+
+impl Tuning {
+    /// The table, for a terminal.
+    pub fn table(&self) -> String {
+        let u = self.units;
+        let mut out = String::new();
+        let _ = writeln!(
+            out,
+            "{:<34} {:>20} {:>18} {:>16} {:>16} {:>18} {:>14}  within",
+            "setting",
+            format!("U/N ({})", u.energy),
+            format!("P ({})", u.pressure),
+            "err U/N (%)",
+            "err P (%)",
+            format!("D ({})", u.diffusion),
+            format!("CPU s/{}", u.time),
+        );
+        for (k, row) in self.rows.iter().enumerate() {
+            let knob = &self.knobs[row.knob];
+            let mut setting = format!("{}={}", knob.key, short(row.value));
+            if k + 1 == self.rows.len() || self.rows[k + 1].knob != row.knob {
+                setting.push_str(" (ref)");
+            }
+            match &row.probe {
+                Ok(p) => {
+                    let d = row.deviations.expect("judged");
+                    let mark = if self.recommended[row.knob] == Some(k) {
+                        "yes  <- recommended"
+                    } else if row.bound() <= self.budget {
+                        "yes"
+                    } else {
+                        "no"
+                    };
+                    let _ = writeln!(
+                        out,
+                        "{setting:<34} {:>20} {:>18} {:>16} {:>16} {:>18} {:>14.4}  {mark}",
+                        pm(p.energy),
+                        pm(p.pressure),
+                        percent(d[0]),
+                        percent(d[1]),
+                        p.diffusion.map_or("-".to_owned(), pm),
+                        p.cost,
+                    );
+                }
+                Err(e) => {
+                    let _ = writeln!(out, "{setting:<34} failed: {e}");
+                }
+            }
+        }
+        out
+    }
+
+    /// The recommendation: the `--set` lines, or why there is none.
+    pub fn recommendation(&self) -> String {
+        let mut out = String::new();
+        let _ = writeln!(
+            out,
+            "Error = |difference from the finest setting| + its standard error, relative to |U/N| \
+             and to max(|P|, ρkT), within {:.3} % for each knob (probed one at a time).",
+            100.0 * self.target
+        );
+        for (k, knob) in self.knobs.iter().enumerate() {
+            let first = k * FACTORS.len();
+            let finest = first + FACTORS.len() - 1;
+            match self.recommended[k] {
+                Some(r) if r == finest => {
+                    let next = &self.rows[finest - 1];
+                    let _ = writeln!(
+                        out,
+                        "# {}: no coarser setting is within the target at this probe length; the \
+                         finest probed is recommended, and its own error is not known (the next \
+                         coarser differs from it by {}).{}",
+                        knob.label,
+                        next.deviations.map_or("?".to_owned(), |d| {
+                            let w = if d[0].bound() >= d[1].bound() {
+                                d[0]
+                            } else {
+                                d[1]
+                            };
+                            format!("{} %", percent(w))
+                        }),
+                        match longer(next, self.budget) {
+                            Some(f) => format!(
+                                " Its difference is within the target but not its error bar: \
+                                 probes about {f:.0} times longer would tell."
+                            ),
+                            None => String::new(),
+                        }
+                    );
+                    for s in knob.sets(self.rows[r].value) {
+                        let _ = writeln!(out, "--set {s}");
+                    }
+                }
+                Some(r) => {
+                    let row = &self.rows[r];
+                    for s in knob.sets(row.value) {
+                        let _ = writeln!(
+                            out,
+                            "--set {s}    # {} {} {}: error ≤ {:.2} %, {:.4} CPU s per {}",
+                            knob.label,
+                            short(row.value),
+                            knob.unit,
+                            100.0 * row.bound(),
+                            row.cost(),
+                            self.units.time
+                        );
+                    }
+                }
+                None => {
+                    let _ = writeln!(
+                        out,
+                        "# {}: no setting could be judged (the reference probe gave no value)",
+                        knob.label
+                    );
+                }
+            }
+        }
+        out
+    }
+
+    /// The `--set` lines of the recommended settings.
+    pub fn recommended_sets(&self) -> Vec<String> {
+        self.knobs
+            .iter()
+            .zip(&self.recommended)
+            .filter_map(|(knob, r)| r.map(|r| knob.sets(self.rows[r].value)))
+            .flatten()
+            .collect()
+    }
+
+    /// The `--set` lines of every knob's finest setting (the references).
+    pub fn reference_sets(&self) -> Vec<String> {
+        self.knobs
+            .iter()
+            .flat_map(|k| k.sets(k.value * FACTORS[FACTORS.len() - 1]))
+            .collect()
+    }
+
+    /// Writes `tune.csv` (one row per probe, units in the header) and `tune.svg` (error
+    /// bound against cost, one curve per knob, the target dashed) into `dir`; returns their
+    /// paths.
+    ///
+    /// # Errors
+    /// [`OutputError`].
+    pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>, OutputError> {
+        std::fs::create_dir_all(dir).map_err(|e| OutputError {
+            path: dir.to_owned(),
+            message: e.to_string(),
+        })?;
+        let u = self.units;
+        let mut csv = format!(
+            "key,value,U_per_body ({e}),U_per_body_error ({e}),P ({p}),P_error ({p}),\
+             D ({d}),D_error ({d}),cpu_seconds_per_{t} (s/{t}),U_rel_error,U_rel_uncertainty,\
+             P_rel_error,P_rel_uncertainty,bound,within_target,recommended\n",
+            e = u.energy,
+            p = u.pressure,
+            d = u.diffusion,
+            t = u.time
+        );
+        for (k, row) in self.rows.iter().enumerate() {
+            let knob = &self.knobs[row.knob];
+            let nan = Measured {
+                value: f64::NAN,
+                error: f64::NAN,
+            };
+            let (p, d) = match &row.probe {
+                Ok(p) => (p.clone(), row.deviations.expect("judged")),
+                Err(_) => (
+                    Probe {
+                        energy: nan,
+                        pressure: nan,
+                        pressure_ideal: f64::NAN,
+                        diffusion: None,
+                        cost: f64::NAN,
+                    },
+                    [Deviation {
+                        error: f64::NAN,
+                        uncertainty: f64::NAN,
+                    }; 2],
+                ),
+            };
+            let diff = p.diffusion.unwrap_or(nan);
+            let cells = [
+                p.energy.value,
+                p.energy.error,
+                p.pressure.value,
+                p.pressure.error,
+                diff.value,
+                diff.error,
+                p.cost,
+                d[0].error,
+                d[0].uncertainty,
+                d[1].error,
+                d[1].uncertainty,
+                row.bound(),
+            ];
+            let _ = write!(csv, "{},{:e}", knob.key, row.value);
+            for c in cells {
+                let _ = write!(csv, ",{c:e}");
+            }
+            let _ = writeln!(
+                csv,
+                ",{},{}",
+                row.bound() <= self.budget,
+                self.recommended[row.knob] == Some(k)
+            );
+        }
+        let csv_path = dir.join("tune.csv");
+        write_atomically(&csv_path, csv.as_bytes())?;
+        let mut lines: Vec<Line> = self
+            .knobs
+            .iter()
+            .enumerate()
+            .map(|(k, knob)| {
+                Line::new(
+                    format!(
+                        "{} ({} … {} {})",
+                        knob.label,
+                        short(knob.value * FACTORS[0]),
+                        short(knob.value * FACTORS[FACTORS.len() - 1]),
+                        knob.unit
+                    ),
+                    self.rows
+                        .iter()
+                        .filter(|r| r.knob == k && r.cost().is_finite())
+                        // The reference's bound is 0 by definition: it is drawn at its cost.
+                        .map(|r| (r.cost(), 100.0 * r.bound()))
+                        .collect(),
+                )
+            })
+            .collect();
+        let costs: Vec<f64> = self
+            .rows
+            .iter()
+            .map(Row::cost)
+            .filter(|c| c.is_finite())
+            .collect();
+        let (lo, hi) = costs
+            .iter()
+            .fold((f64::INFINITY, 0.0f64), |(a, b), &c| (a.min(c), b.max(c)));
+        if lo.is_finite() {
+            let mut target = Line::new(
+                format!("target, {:.3} %", 100.0 * self.budget),
+                vec![(lo, 100.0 * self.budget), (hi, 100.0 * self.budget)],
+            );
+            target.dashed = true;
+            lines.push(target);
+        }
+        let svg_path = dir.join("tune.svg");
+        write_plot(
+            &svg_path,
+            &Plot {
+                title: "Error against cost of each accuracy knob".to_owned(),
+                caption: self.length.clone(),
+                x_label: format!("CPU s per {}", u.time),
+                y_label: "error bound vs finest setting (%)".to_owned(),
+                lines,
+            },
+        )?;
+        Ok(vec![csv_path, svg_path])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(knob: usize, value: f64, cost: f64, error: f64, uncertainty: f64) -> Row {
+        let m = Measured {
+            value: 1.0,
+            error: 0.0,
+        };
+        Row {
+            knob,
+            value,
+            probe: Ok(Probe {
+                energy: m,
+                pressure: m,
+                pressure_ideal: 1.0,
+                diffusion: None,
+                cost,
+            }),
+            deviations: Some([
+                Deviation { error, uncertainty },
+                Deviation {
+                    error: 0.0,
+                    uncertainty: 0.0,
+                },
+            ]),
+        }
+    }
+
+    #[test]
+    fn the_cheapest_row_within_the_budget_is_chosen() {
+        // Coarse and cheap but off; the second cheapest qualifies only with its uncertainty
+        // counted below the budget; the finest qualifies and costs most.
+        let rows = [
+            row(0, 2.0, 1.0, 0.05, 0.001),
+            row(0, 1.0, 2.0, 0.008, 0.001),
+            row(0, 0.5, 4.0, 0.002, 0.001),
+            row(0, 0.25, 8.0, 0.0, 0.0),
+        ];
+        let refs: Vec<&Row> = rows.iter().collect();
+        assert_eq!(cheapest_within(&refs, 0.01), Some(1));
+        // The uncertainty counts: 0.008 + 0.001 exceeds 0.0085.
+        assert_eq!(cheapest_within(&refs, 0.0085), Some(2));
+        assert_eq!(cheapest_within(&refs, 0.1), Some(0));
+        // A failed probe is never chosen, however cheap.
+        let mut failed = row(0, 4.0, 0.1, 0.0, 0.0);
+        failed.probe = Err("unstable".to_owned());
+        failed.deviations = None;
+        let refs: Vec<&Row> = std::iter::once(&failed).chain(rows.iter()).collect();
+        assert_eq!(cheapest_within(&refs, 0.1), Some(1));
+        // An unknown uncertainty (NaN) disqualifies.
+        let unknown = row(0, 3.0, 0.5, 0.0, f64::NAN);
+        let refs: Vec<&Row> = std::iter::once(&unknown).chain(rows.iter()).collect();
+        assert_eq!(cheapest_within(&refs, 0.1), Some(1));
+    }
+
+    #[test]
+    fn longer_probes_are_asked_for_only_when_the_difference_alone_is_within() {
+        // 1 % off with a 2 % error bar against a 2 % target: (2 / (2 − 1))² = 4 times longer.
+        let r = row(0, 1.0, 1.0, 0.01, 0.02);
+        assert!((longer(&r, 0.02).unwrap() - 4.0).abs() < 1e-12);
+        // Already within, or off by more than the target: no such advice.
+        assert_eq!(longer(&row(0, 1.0, 1.0, 0.01, 0.005), 0.02), None);
+        assert_eq!(longer(&row(0, 1.0, 1.0, 0.03, 0.001), 0.02), None);
+    }
+
+    #[test]
+    fn deviations_are_relative_with_both_errors_in_quadrature() {
+        let x = Measured {
+            value: -9.0,
+            error: 0.03,
+        };
+        let r = Measured {
+            value: -10.0,
+            error: 0.04,
+        };
+        let d = Deviation::of(x, r, 10.0, false);
+        assert!((d.error - 0.1).abs() < 1e-15);
+        assert!((d.uncertainty - 0.005).abs() < 1e-15);
+        assert!((d.bound() - 0.105).abs() < 1e-15);
+        assert_eq!(Deviation::of(x, r, 10.0, true).bound(), 0.0);
+    }
+
+    #[test]
+    fn judging_scales_the_pressure_by_rho_kt_when_it_is_small() {
+        let probe = |u: f64, p: f64| Probe {
+            energy: Measured {
+                value: u,
+                error: 0.0,
+            },
+            pressure: Measured {
+                value: p,
+                error: 0.0,
+            },
+            pressure_ideal: 2.0,
+            diffusion: None,
+            cost: 1.0,
+        };
+        let mut rows: Vec<Row> = [(-4.1, 0.2), (-4.0, 0.1)]
+            .iter()
+            .map(|&(u, p)| Row {
+                knob: 0,
+                value: 1.0,
+                probe: Ok(probe(u, p)),
+                deviations: None,
+            })
+            .collect();
+        judge(&mut rows, 0.1);
+        let d = rows[0].deviations.unwrap();
+        assert!((d[0].error - 0.025).abs() < 1e-12);
+        // P differs by 0.1 with |P_ref| = 0.1 < ρkT = 2: 5 %, not 100 %.
+        assert!((d[1].error - 0.05).abs() < 1e-12);
+    }
+}
