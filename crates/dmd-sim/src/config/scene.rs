@@ -1077,6 +1077,40 @@ impl crate::engine::potential::Potentials {
 }
 
 impl Scene {
+    /// Which of the dotted `keys` (e.g. `run.events`) the scene `text`, with `overrides`
+    /// applied, sets: for callers that must know what a scene gives, not only its values.
+    ///
+    /// # Errors
+    /// [`SceneError::Syntax`] for text that is not TOML, [`SceneError::Override`] as
+    /// [`apply_override`](Self::apply_override).
+    pub fn given_keys(
+        text: &str,
+        overrides: &[String],
+        keys: &[&str],
+    ) -> Result<Vec<bool>, SceneError> {
+        let mut doc: toml::Table = text
+            .parse()
+            .map_err(|e: toml::de::Error| SceneError::Syntax(e.to_string()))?;
+        for o in overrides {
+            Self::apply_override(&mut doc, o)?;
+        }
+        Ok(keys
+            .iter()
+            .map(|key| {
+                let mut table = &doc;
+                let mut parts = key.split('.').peekable();
+                while let Some(p) = parts.next() {
+                    match table.get(p) {
+                        Some(_) if parts.peek().is_none() => return true,
+                        Some(toml::Value::Table(inner)) => table = inner,
+                        _ => return false,
+                    }
+                }
+                false
+            })
+            .collect())
+    }
+
     /// Applies one `KEY=VALUE` override to a parsed scene document. `KEY` is a dotted path
     /// (`run.events`, `species.0.mass`: an index picks an element of an array); `VALUE` is
     /// read as a TOML value (`0.5`, `[1, 1, 2]`, `"heap"`, `inf`), or as a string if it is not

@@ -323,14 +323,12 @@ pub fn knobs(scene: &Scene) -> Result<Vec<Knob>, TuneError> {
 /// scene's lengths; outputs a probe does not use (trajectories, g(r), correlations other
 /// than the MSD, the series) are dropped.
 fn probe_overrides(
-    doc: &toml::Table,
+    given: &dyn Fn(&str) -> bool,
     scene: &Scene,
     options: &TuneOptions,
 ) -> (Vec<String>, String) {
     let names = UnitNames::of(scene.units);
     let mut sets = Vec::new();
-    let run = doc.get("run").and_then(|r| r.as_table());
-    let has = |t: Option<&toml::Table>, k: &str| t.is_some_and(|t| t.contains_key(k));
     let production = match (
         options.time,
         options.events,
@@ -338,14 +336,14 @@ fn probe_overrides(
         scene.run.events,
     ) {
         (Some(t), _, _, _) => {
-            if has(run, "events") {
+            if given("run.events") {
                 sets.push("run.events=".to_owned());
             }
             sets.push(format!("run.time={t}"));
             format!("{t} {}", names.time)
         }
         (None, Some(n), _, _) => {
-            if has(run, "time") {
+            if given("run.time") {
                 sets.push("run.time=".to_owned());
             }
             sets.push(format!("run.events={}", n.round()));
@@ -374,13 +372,12 @@ fn probe_overrides(
     } else {
         "none".to_owned()
     };
-    let output = doc.get("output").and_then(|o| o.as_table());
     for k in ["trajectory", "gsd", "rdf", "vacf", "orientation_acf"] {
-        if has(output, k) {
+        if given(&format!("output.{k}")) {
             sets.push(format!("output.{k}="));
         }
     }
-    if has(output, "series") {
+    if given("output.series") {
         sets.push("output.series=false".to_owned());
     }
     (
@@ -494,13 +491,19 @@ pub fn tune(
         path: path.to_owned(),
         source,
     })?;
-    let mut doc: toml::Table = text
-        .parse()
-        .map_err(|e: toml::de::Error| SceneError::Syntax(e.to_string()))?;
-    for o in &options.overrides {
-        Scene::apply_override(&mut doc, o)?;
-    }
-    let (shorten, length) = probe_overrides(&doc, &scene, options);
+    const ASKED: [&str; 8] = [
+        "run.events",
+        "run.time",
+        "output.trajectory",
+        "output.gsd",
+        "output.rdf",
+        "output.vacf",
+        "output.orientation_acf",
+        "output.series",
+    ];
+    let present = Scene::given_keys(&text, &options.overrides, &ASKED)?;
+    let given = |key: &str| ASKED.iter().zip(&present).any(|(k, &p)| p && *k == key);
+    let (shorten, length) = probe_overrides(&given, &scene, options);
     // Every probe's scene is checked before the first runs.
     let mut plan: Vec<(usize, f64, Vec<String>)> = Vec::new();
     for (k, knob) in knobs.iter().enumerate() {
