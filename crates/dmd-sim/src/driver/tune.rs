@@ -224,6 +224,10 @@ pub struct Tuning {
     pub units: &'static UnitNames,
     /// The probe length, for people (`5 ps of production after 5 ps of equilibration`).
     pub length: String,
+    /// Whether U/N and P are the smooth estimators' (the continuous model along the terraced
+    /// run, `potential_energy_per_body_smooth`, `pressure_smooth`) rather than the terraced
+    /// potential's own.
+    pub smooth: bool,
 }
 
 /// The cheapest row (by [`Row::cost`]) among `rows` whose bound is within `budget`; among
@@ -387,7 +391,7 @@ fn probe_overrides(
 }
 
 /// Runs one probe of `text` (the scene file's text) with `overrides`.
-fn probe(text: &str, base: &Path, overrides: &[String]) -> Result<Probe, RunError> {
+fn probe(text: &str, base: &Path, overrides: &[String], smooth: bool) -> Result<Probe, RunError> {
     let scene = Scene::from_str_with(text, overrides)?;
     let m = |value: f64, error: Option<f64>| Measured {
         value,
@@ -412,12 +416,34 @@ fn probe(text: &str, base: &Path, overrides: &[String]) -> Result<Probe, RunErro
         });
     }
     let s = run_scene(&scene, base, None, &mut Quiet)?;
+    let (energy, pressure) = if smooth {
+        match (s.potential_energy_per_body_smooth, s.pressure_smooth) {
+            (Some(u), Some(p)) => (
+                m(u, s.potential_energy_per_body_smooth_error),
+                m(p, s.pressure_smooth_error),
+            ),
+            _ => {
+                return Err(SceneError::invalid(
+                    "output.smooth_estimators",
+                    "a probe ran without the smooth estimators that dmd tune judges terraced \
+                     scenes by (their cut-off must fit in half the box); set \
+                     output.smooth_estimators = false to tune the terraced values",
+                )
+                .into());
+            }
+        }
+    } else {
+        (
+            m(
+                s.potential_energy_per_body,
+                s.potential_energy_per_body_error,
+            ),
+            m(s.pressure, s.pressure_error),
+        )
+    };
     Ok(Probe {
-        energy: m(
-            s.potential_energy_per_body,
-            s.potential_energy_per_body_error,
-        ),
-        pressure: m(s.pressure, s.pressure_error),
+        energy,
+        pressure,
         pressure_ideal: s.pressure_ideal,
         diffusion: s.diffusion_msd.map(|d| m(d, s.diffusion_msd_error)),
         cost: s.cpu_seconds / s.sim_time,
@@ -487,6 +513,10 @@ pub fn tune(
         ));
     }
     let knobs = knobs(&scene)?;
+    // A terraced scene's own U/N and P converge to the continuous model only as ΔV^½ (the cut
+    // of the attractive tail, docs/VALIDATION.md); its smooth estimators measure the continuous
+    // model along the run, which is what the terraces approximate: they are judged instead.
+    let smooth = scene.engine != Engine::Smd && scene.wants_smooth_estimators();
     let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
         path: path.to_owned(),
         source,
@@ -503,7 +533,12 @@ pub fn tune(
     ];
     let present = Scene::given_keys(&text, &options.overrides, &ASKED)?;
     let given = |key: &str| ASKED.iter().zip(&present).any(|(k, &p)| p && *k == key);
-    let (shorten, length) = probe_overrides(&given, &scene, options);
+    let (mut shorten, length) = probe_overrides(&given, &scene, options);
+    if smooth {
+        // Every sample, so that short probes have enough for an error bar; the estimator's
+        // cost per simulated time is the same for every probe and keeps their order of cost.
+        shorten.push("output.smooth_every=1".to_owned());
+    }
     // Every probe's scene is checked before the first runs.
     let mut plan: Vec<(usize, f64, Vec<String>)> = Vec::new();
     for (k, knob) in knobs.iter().enumerate() {
@@ -535,7 +570,7 @@ pub fn tune(
             None => {
                 let what = format!("{} = {} {}", knob.key, short(value), knob.unit);
                 progress(done.len(), total, &what);
-                let r = probe(&text, &base, &sets);
+                let r = probe(&text, &base, &sets, smooth);
                 let is_ref = value == knob.value * FACTORS[FACTORS.len() - 1];
                 let r = match r {
                     Err(e) if is_ref => {
@@ -571,6 +606,7 @@ pub fn tune(
         recommended,
         units: UnitNames::of(scene.units),
         length,
+        smooth,
     })
 }
 
@@ -629,8 +665,16 @@ impl Tuning {
             out,
             "{:<34} {:>20} {:>18} {:>16} {:>16} {:>18} {:>14}  within",
             "setting",
-            format!("U/N ({})", u.energy),
-            format!("P ({})", u.pressure),
+            format!(
+                "U/N{} ({})",
+                if self.smooth { " smooth" } else { "" },
+                u.energy
+            ),
+            format!(
+                "P{} ({})",
+                if self.smooth { " smooth" } else { "" },
+                u.pressure
+            ),
             "err U/N (%)",
             "err P (%)",
             format!("D ({})", u.diffusion),
@@ -677,8 +721,14 @@ impl Tuning {
         let _ = writeln!(
             out,
             "Error = |difference from the finest setting| + its standard error, relative to |U/N| \
-             and to max(|P|, ρkT), within {:.3} % for each knob (probed one at a time).",
-            100.0 * self.target
+             and to max(|P|, ρkT), within {:.3} % for each knob (probed one at a time){}.",
+            100.0 * self.target,
+            if self.smooth {
+                "; U/N and P of the smooth estimators (the continuous model along the terraced \
+                 run)"
+            } else {
+                ""
+            }
         );
         for (k, knob) in self.knobs.iter().enumerate() {
             let first = k * FACTORS.len();
@@ -770,9 +820,10 @@ impl Tuning {
         })?;
         let u = self.units;
         let mut csv = format!(
-            "key,value,U_per_body ({e}),U_per_body_error ({e}),P ({p}),P_error ({p}),\
+            "key,value,U_per_body{x} ({e}),U_per_body{x}_error ({e}),P{x} ({p}),P{x}_error ({p}),\
              D ({d}),D_error ({d}),cpu_seconds_per_{t} (s/{t}),U_rel_error,U_rel_uncertainty,\
              P_rel_error,P_rel_uncertainty,bound,within_target,recommended\n",
+            x = if self.smooth { "_smooth" } else { "" },
             e = u.energy,
             p = u.pressure,
             d = u.diffusion,
