@@ -54,7 +54,7 @@ impl Scene {
         Ok(scene)
     }
 
-    /// The scene of one point of a `[sweep]` (issue 9): the key set to value `k`, the sweep
+    /// The scene of one point of a `[sweep]`: the key set to value `k`, the sweep
     /// and chains tables removed.
     ///
     /// # Errors

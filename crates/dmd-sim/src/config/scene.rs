@@ -141,26 +141,25 @@ pub struct Scene {
     pub output: OutputSpec,
     /// Root searches of event times (terraced potentials of rods only).
     pub search: Option<SearchSpec>,
-    /// Hybrid Monte Carlo (issue 9; off unless given).
+    /// Hybrid Monte Carlo (off unless given).
     #[serde(default)]
     pub hmc: Option<HmcSpec>,
-    /// Independent chains of the scene run in parallel (issue 9).
+    /// Independent chains of the scene run in parallel.
     #[serde(default)]
     pub chains: Option<ChainsSpec>,
-    /// A parameter sweep: the scene run once per value of a key (issue 9).
+    /// A parameter sweep: the scene run once per value of a key.
     #[serde(default)]
     pub sweep: Option<SweepSpec>,
-    /// The engine: `dmd` (event-driven, default) or `smd` (standard MD, issue 8).
+    /// The engine: `dmd` (event-driven, default) or `smd` (standard MD).
     #[serde(default)]
     pub engine: Engine,
-    /// Settings of the standard-MD engine (issue 8; ignored by the event-driven one).
+    /// Settings of the standard-MD engine (ignored by the event-driven one).
     #[serde(default)]
     pub smd: Option<SmdSpec>,
-    /// Site–site potentials of rigid site molecules, one per unordered pair of site kinds
-    /// (issue 10).
+    /// Site–site potentials of rigid site molecules, one per unordered pair of site kinds.
     #[serde(default)]
     pub site_pair: Vec<SitePairSpec>,
-    /// How events of rigid site molecules are executed (issue 10).
+    /// How events of rigid site molecules are executed.
     pub impulse: Option<ImpulseSpec>,
     /// The RATTLE integration of semi-flexible molecules (species with `bonds`).
     pub rattle: Option<RattleSpec>,
@@ -178,7 +177,7 @@ pub enum UnitSystem {
     Molecular,
 }
 
-// ----- Hybrid Monte Carlo, chains and sweeps (issue 9) ------------------------------------------
+// ----- Hybrid Monte Carlo, chains and sweeps -----------------------------------------------------
 
 /// The ensemble an HMC chain samples.
 #[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
@@ -356,9 +355,9 @@ pub struct SpeciesSpec {
     /// any shape (an asymmetric top), for potentials that read each body's whole attitude
     /// (`ssd-e`).
     pub moments: Option<[f64; 3]>,
-    /// The atoms of a rigid site molecule (issue 10).
+    /// The atoms of a rigid site molecule.
     pub sites: Option<Vec<SiteSpec>>,
-    /// Or: a shipped rigid site molecule (issue 10).
+    /// Or: a shipped rigid site molecule.
     pub molecule: Option<MoleculeSpec>,
     /// Distance constraints `[a, b]` between sites (0-based indices into `sites`), lengths as
     /// given by the positions: the species is a semi-flexible molecule.
@@ -385,7 +384,7 @@ fn rattle_tolerance() -> f64 {
     1e-12
 }
 
-// ----- Rigid site molecules (issue 10) -----------------------------------------------------------
+// ----- Rigid site molecules ----------------------------------------------------------------------
 
 /// One atom (site) of a rigid molecule.
 #[derive(Clone, Debug, Deserialize, PartialEq)]
@@ -1575,7 +1574,7 @@ impl Scene {
                     }
                     check_steps(k, &p.steps)?;
                 }
-                // Standard MD integrates the smooth potential itself (issue 8).
+                // Standard MD integrates the smooth potential itself.
                 (Some(pot), true) if p.terraces.is_none() && self.engine == Engine::Smd => {
                     check_potential(k, pot)?;
                 }

@@ -1,4 +1,4 @@
-//! Rigid site molecules in scenes (issue 10): from the `sites`/`molecule` keys of the species,
+//! Rigid site molecules in scenes: from the `sites`/`molecule` keys of the species,
 //! the `[[site_pair]]` tables and `[impulse]` to a [`Sites`] model with its initial
 //! attitudes.
 //!

@@ -182,7 +182,7 @@ impl Scene {
                 }
             }
         }
-        // Issue 10: site–site steps are energies too.
+        // Site–site steps are energies too.
         for p in &mut s.site_pair {
             for step in &mut p.steps {
                 step[1] *= e;

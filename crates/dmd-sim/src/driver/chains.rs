@@ -1,4 +1,4 @@
-//! Independent chains and parameter sweeps of one scene, run in parallel (issue 9).
+//! Independent chains and parameter sweeps of one scene, run in parallel.
 //!
 //! A scene with `[chains] count = C` and/or `[sweep] key = "…", values = [v₀, v₁, …]` is a set
 //! of **jobs**: for every sweep point `p` (the key set to `v_p`, as `--set` would) and every

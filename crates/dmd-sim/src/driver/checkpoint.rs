@@ -1,4 +1,4 @@
-//! Checkpoints: a run saved to a file and continued bit for bit by `dmd resume` (issue 9).
+//! Checkpoints: a run saved to a file and continued bit for bit by `dmd resume`.
 //!
 //! **When.** A plain run is saved at a re-basing of the time origin (see
 //! [`simulation::SimState`](crate::engine::simulation::SimState) for why that continues bit for bit):

@@ -22,10 +22,10 @@ pub enum RunError {
     /// An output could not be written.
     #[error(transparent)]
     Output(#[from] OutputError),
-    /// A checkpoint cannot be resumed (issue 9).
+    /// A checkpoint cannot be resumed.
     #[error(transparent)]
     Checkpoint(#[from] CheckpointError),
-    /// The standard-MD engine could not go on (issue 8).
+    /// The standard-MD engine could not go on.
     #[error("smd: {0}")]
     Smd(#[from] smd::SmdError),
     /// Stopped after a checkpoint, as `RunOptions::halt_after_checkpoint` asked.
@@ -44,7 +44,7 @@ pub enum RunError {
         /// The checkpoint written.
         checkpoint: Option<std::path::PathBuf>,
     },
-    /// A job of an ensemble of chains or sweep points failed (issue 9).
+    /// A job of an ensemble of chains or sweep points failed.
     #[error("job {job}: {source}")]
     Job {
         /// The job's folder.

@@ -55,7 +55,7 @@ use crate::engine::simulation::{Andersen, LoopSettings, Progress, SetupError, Si
 use crate::models::rotor::TopInertia;
 use crate::models::search::SearchStats;
 
-/// What a run does besides the scene (issue 9): checkpoints, and resuming from one.
+/// What a run does besides the scene: checkpoints, and resuming from one.
 #[derive(Debug, Default)]
 pub struct RunOptions {
     /// Write `DIR/checkpoint.dmd` this often (needs `source` and an output folder).
@@ -75,7 +75,7 @@ pub struct RunOptions {
 /// production.
 #[derive(Clone, Debug, Serialize)]
 pub struct Summary {
-    /// `dmd` (the standard-MD engine writes `smd`, issue 8).
+    /// `dmd` (the standard-MD engine writes `smd`).
     pub engine: String,
     /// Events of production (pair events, cell crossings, thermostat collisions).
     pub events: u64,
@@ -227,7 +227,7 @@ pub struct Summary {
     pub seed: u64,
     /// Files written besides `summary.json`.
     pub files: Vec<String>,
-    /// Hybrid Monte Carlo statistics (issue 9; only with `[hmc]`).
+    /// Hybrid Monte Carlo statistics (only with `[hmc]`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub hmc: Option<HmcSummary>,
     /// Largest relative bond-length error of the semi-flexible molecules at the end (at their
@@ -436,7 +436,7 @@ fn set_up<G: Go>(
     g: G,
 ) -> Result<G::Out, RunError> {
     if scene.engine == crate::driver::smd_engine::Engine::Smd {
-        // Issue 8: never run an smd scene event-driven behind the caller's back.
+        // Never run an smd scene event-driven behind the caller's back.
         return Err(SceneError::invalid(
             "engine",
             "this scene asks for the smd engine: run it with smd_engine::run (as `dmd run` does)",
@@ -486,7 +486,7 @@ fn set_up<G: Go>(
         _ => None,
     };
     let config = match (&options.resume, scene.init.positions) {
-        // Issue 9: a resumed run takes its configuration from the checkpoint.
+        // A resumed run takes its configuration from the checkpoint.
         (Some((_, c)), _) => Configuration {
             lengths: c.sim.lengths,
             positions: c.sim.bodies.iter().map(|b| b.r).collect(),
@@ -1461,7 +1461,7 @@ fn scene_name(options: &RunOptions) -> Option<String> {
         .filter(|s| !s.is_empty())
 }
 
-// ----- Checkpoints and HMC segments (issue 9) ---------------------------------------------------
+// ----- Checkpoints and HMC segments --------------------------------------------------------------
 
 /// Runs the phases of a scene in pieces, saving checkpoints between them.
 struct Driver {

@@ -1,4 +1,4 @@
-//! The scene's second engine (issue 8): standard molecular dynamics of the `smd` crate on the
+//! The scene's second engine: standard molecular dynamics of the `smd` crate on the
 //! same scene files, observables and output files as the event-driven engine.
 //!
 //! A scene says `engine = "smd"` (or `dmd run --engine smd`), and an optional `[smd]` table

@@ -4,7 +4,7 @@
 //! time is `r + v (t' − t)`. Nothing moves the whole system per event. Everything a pair
 //! prediction reads of a partner (position, clock, velocity, species, cell) sits in one
 //! cache-line-aligned record, so scanning a neighbourhood costs one cache line per partner.
-//! Spheres carry no orientation: rigid bodies (issue 7) keep theirs in their model's own
+//! Spheres carry no orientation: rigid bodies keep theirs in their model's own
 //! arrays, indexed like these records, and leave this record unchanged.
 
 use glam::DVec3;

@@ -179,7 +179,7 @@ pub trait PairModel {
     #[inline(always)]
     fn rebase(&mut self, _t0: f64) {}
 
-    // ----- Hybrid Monte Carlo and checkpoints (issue 9) ---------------------------------------
+    // ----- Hybrid Monte Carlo and checkpoints ----------------------------------------------------
     // The stored pair levels are opaque numbers to the loop (0: not stored); only the model
     // knows what they mean. Hooks of the per-body state have defaults that do nothing, right
     // for spheres (no state beyond the `Body` record and the pair levels); the rigid model

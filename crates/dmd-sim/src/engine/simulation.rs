@@ -44,7 +44,7 @@ use crate::engine::neighbour::{self, NeighbourLists};
 use crate::engine::schedule::Scheduler;
 use crate::engine::sum::Compensated;
 
-// Hybrid Monte Carlo segments and checkpoints (issue 9): saving and restoring the state at a
+// Hybrid Monte Carlo segments and checkpoints: saving and restoring the state at a
 // re-basing of the time origin, pausing there, and the energy of a configuration from its
 // distances. A child module, so that it reaches the loop's private state.
 mod state;
@@ -414,7 +414,7 @@ pub struct Simulation<M, S> {
     since_rebase: u64,
     since_check: u64,
     nan: Option<u32>,
-    // Issue 9: `run` returns at a re-basing when asked (a checkpoint can be taken there), and
+    // `run` returns at a re-basing when asked (a checkpoint can be taken there), and
     // momenta are refreshed by HMC (3N degrees of freedom).
     pause_at_rebase: bool,
     paused: bool,
@@ -596,7 +596,7 @@ where
         Ok(sim)
     }
 
-    // ----- the loop -------------------------------------------------------------------------
+    // ----- the loop ------------------------------------------------------------------------------
 
     /// Runs until `stop`, calling `sampler` at sampling events and `progress` every 16384
     /// events.
@@ -625,7 +625,7 @@ where
             }
             if self.since_rebase >= self.settings.rebase_events {
                 self.rebase();
-                // Issue 9: a checkpoint can be taken here (see `state`).
+                // A checkpoint can be taken here (see `state`).
                 if self.pause_at_rebase {
                     self.paused = true;
                     break;
@@ -659,7 +659,7 @@ where
             }
         }
         if self.paused {
-            // Issue 9: paused at a re-basing; `end` stays for the continuation.
+            // Paused at a re-basing; `end` stays for the continuation.
             return Ok(());
         }
         if self.end < f64::INFINITY {
@@ -1103,7 +1103,7 @@ where
         }
     }
 
-    // ----- prediction -----------------------------------------------------------------------
+    // ----- prediction ----------------------------------------------------------------------------
 
     /// Whether the loop loads ahead ([`touch`](Self::touch), the next body's list): while the
     /// working set (records, neighbour lists, event lists) fits in L2 the extra loads only
@@ -1283,7 +1283,7 @@ where
         self.predict_all();
     }
 
-    // ----- phases ---------------------------------------------------------------------------
+    // ----- phases --------------------------------------------------------------------------------
 
     /// A flag that stops [`run`](Self::run) with [`SimError::Cancelled`] when raised (from
     /// another thread, or from its `progress` callback); it is read every 16384 events, where
@@ -1391,7 +1391,7 @@ where
         f
     }
 
-    // ----- measurements ---------------------------------------------------------------------
+    // ----- measurements --------------------------------------------------------------------------
 
     fn view(&self) -> View<'_> {
         View {

@@ -1,4 +1,4 @@
-//! Semi-flexible molecules (seed 000, issue 10): point atoms held together by distance
+//! Semi-flexible molecules (seed 000): point atoms held together by distance
 //! constraints that need not fix the whole body — a chain with fixed bond lengths and free bond
 //! and torsion angles, say — interacting through stepped radial potentials between the atoms
 //! ("sites") of different molecules.

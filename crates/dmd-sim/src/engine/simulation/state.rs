@@ -1,5 +1,5 @@
 //! The loop's state at a re-basing of the time origin, for hybrid Monte Carlo segments and
-//! checkpoints (issue 9), and the energy of a configuration from its distances.
+//! checkpoints, and the energy of a configuration from its distances.
 //!
 //! **Why at a re-basing.** Right after the time origin moved to the present, every body's
 //! clock is zero and every event list and the schedule are a pure function of the stored
