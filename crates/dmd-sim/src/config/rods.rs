@@ -28,7 +28,9 @@ use crate::config::scene::{
 };
 use crate::models::rotor::{Rotor, Top, TopInertia};
 use crate::models::search::{SearchMethod, SearchSettings};
-use crate::models::terraced::{BodySpecies, PairTable, Rigid, RodSpecies, Terraced, draw_omega};
+use crate::models::terraced::{
+    BodySpecies, ModelError, PairTable, PairTerraces, Rigid, RodSpecies, Terraced, draw_omega,
+};
 
 /// SSD/E water on terraces, between rigid tops.
 pub type Water = Rigid<potential::SoftStickyDipole>;
@@ -385,6 +387,24 @@ pub(crate) fn terrace_error(k: usize, e: potential::PotentialError, scale: f64) 
     SceneError::invalid(key, problem)
 }
 
+/// Pair table `k`'s terraces as built, or the model's refusal naming `pair[k].terraces`.
+pub(crate) fn pair_terraces<P>(
+    k: usize,
+    built: Result<PairTerraces<P>, ModelError>,
+) -> Result<PairTerraces<P>, SceneError> {
+    built.map_err(|e| SceneError::invalid(format!("pair[{k}].terraces"), e.to_string()))
+}
+
+/// A uniaxial potential smoothed over the window `(r_l, r_u)` (003 Eq. 26), as the smd engine
+/// and the smooth estimators take it, or the refusal naming `smd.smoothing`.
+pub(crate) fn smoothed<P: PairPotential>(
+    p: P,
+    (r_l, r_u): (f64, f64),
+) -> Result<potential::Smoothed<P>, SceneError> {
+    potential::Smoothed::new(p, r_l, r_u)
+        .map_err(|e| SceneError::invalid("smd.smoothing", e.to_string()))
+}
+
 /// The terrace map of a pair table (003 Eq. 7 and the placement and step-energy rules).
 pub(crate) fn terrace_map<P: PairPotential, F: Fn(f64) -> f64>(
     k: usize,
@@ -595,8 +615,7 @@ pub fn estimator<P: PairPotential + Clone + std::fmt::Debug + Send + 'static>(
             .potential
             .expect("terraced pairs have a potential");
         let (r_l, r_u) = crate::config::smd_spec::window(scene, &spec);
-        let p = potential::Smoothed::new(t.potential().clone(), r_l, r_u)
-            .map_err(|e| SceneError::invalid("smd.smoothing", e.to_string()))?;
+        let p = smoothed(t.potential().clone(), (r_l, r_u))?;
         cutoff = cutoff.max(r_u);
         pots.push(((*a, *b), p));
     }

@@ -4,7 +4,7 @@ use potential::{GayBerne, Smoothed};
 
 use super::Kind;
 use crate::analysis::output::Drawing;
-use crate::config::rods::{plain_terrace_map, potential_error};
+use crate::config::rods::{pair_terraces, plain_terrace_map, potential_error, smoothed};
 use crate::config::scene::{
     Body, Describe, GayBerneSpec, PotentialSpec, SceneError, TerraceSpec, non_negative, positive,
 };
@@ -81,12 +81,10 @@ impl Kind for GayBerneSpec {
     ) -> Result<PairTerraces<GayBerne>, SceneError> {
         let gb = self.potential(k)?;
         let map = plain_terrace_map(k, potential::PairPotential::minimum(&gb), t, kt, scale)?;
-        PairTerraces::with_outer_reach(gb, map)
-            .map_err(|e| SceneError::invalid(format!("pair[{k}].terraces"), e.to_string()))
+        pair_terraces(k, PairTerraces::with_outer_reach(gb, map))
     }
 
-    fn smd(&self, (r_l, r_u): (f64, f64)) -> Result<Smoothed<GayBerne>, SceneError> {
-        Smoothed::new(self.potential(0)?, r_l, r_u)
-            .map_err(|e| SceneError::invalid("smd.smoothing", e.to_string()))
+    fn smd(&self, window: (f64, f64)) -> Result<Smoothed<GayBerne>, SceneError> {
+        smoothed(self.potential(0)?, window)
     }
 }

@@ -1,18 +1,39 @@
 //! `kind = "lennard-jones"`: Lennard-Jones spheres, whose terraces are radial steps.
 
-use potential::{LennardJones, Smoothed, profile};
+use potential::{LennardJones, Profile, Smoothed, TerraceMap, profile};
 
 use super::Kind;
 use crate::analysis::output::Drawing;
-use crate::config::rods::{potential_error, terrace_error, terrace_map};
+use crate::config::rods::{pair_terraces, potential_error, smoothed, terrace_error, terrace_map};
 use crate::config::scene::{
     Body, Describe, LennardJonesSpec, PotentialSpec, SceneError, TerraceSpec, positive,
 };
 use crate::models::terraced::{PairTerraces, radial_steps};
 
+/// A pair table's potential with its radial profile and terrace map.
+struct Mapped<F> {
+    lj: LennardJones,
+    prof: Profile<F>,
+    map: TerraceMap,
+}
+
 impl LennardJonesSpec {
     fn potential(&self, k: usize) -> Result<LennardJones, SceneError> {
         LennardJones::new(self.epsilon, self.sigma).map_err(|e| potential_error(k, e))
+    }
+
+    /// The potential of pair table `k`, its radial profile and its terrace map.
+    fn mapped(
+        &self,
+        k: usize,
+        t: &TerraceSpec,
+        kt: f64,
+        scale: f64,
+    ) -> Result<Mapped<impl Fn(f64) -> f64 + use<>>, SceneError> {
+        let lj = self.potential(k)?;
+        let prof = profile::lennard_jones(&lj).map_err(|e| terrace_error(k, e, scale))?;
+        let map = terrace_map(k, &lj, Some(&prof), t, kt, scale)?;
+        Ok(Mapped { lj, prof, map })
     }
 }
 
@@ -68,10 +89,8 @@ impl Kind for LennardJonesSpec {
         scale: f64,
     ) -> Option<Result<Vec<[f64; 2]>, SceneError>> {
         let steps = || {
-            let lj = self.potential(k)?;
-            let prof = profile::lennard_jones(&lj).map_err(|e| terrace_error(k, e, scale))?;
-            let map = terrace_map(k, &lj, Some(&prof), t, kt, scale)?;
-            radial_steps(&prof, &map).map_err(|e| terrace_error(k, e, scale))
+            let m = self.mapped(k, t, kt, scale)?;
+            radial_steps(&m.prof, &m.map).map_err(|e| terrace_error(k, e, scale))
         };
         Some(steps())
     }
@@ -83,15 +102,11 @@ impl Kind for LennardJonesSpec {
         kt: f64,
         scale: f64,
     ) -> Result<PairTerraces<LennardJones>, SceneError> {
-        let lj = self.potential(k)?;
-        let prof = profile::lennard_jones(&lj).map_err(|e| terrace_error(k, e, scale))?;
-        let map = terrace_map(k, &lj, Some(&prof), t, kt, scale)?;
-        PairTerraces::new(lj, map)
-            .map_err(|e| SceneError::invalid(format!("pair[{k}].terraces"), e.to_string()))
+        let m = self.mapped(k, t, kt, scale)?;
+        pair_terraces(k, PairTerraces::new(m.lj, m.map))
     }
 
-    fn smd(&self, (r_l, r_u): (f64, f64)) -> Result<Smoothed<LennardJones>, SceneError> {
-        Smoothed::new(self.potential(0)?, r_l, r_u)
-            .map_err(|e| SceneError::invalid("smd.smoothing", e.to_string()))
+    fn smd(&self, window: (f64, f64)) -> Result<Smoothed<LennardJones>, SceneError> {
+        smoothed(self.potential(0)?, window)
     }
 }

@@ -4,7 +4,7 @@ use potential::{LjRod, Smoothed, profile};
 
 use super::Kind;
 use crate::analysis::output::Drawing;
-use crate::config::rods::{potential_error, terrace_error, terrace_map};
+use crate::config::rods::{pair_terraces, potential_error, smoothed, terrace_error, terrace_map};
 use crate::config::scene::{
     Body, Describe, LennardJonesSpec, LjRodsSpec, PotentialSpec, SceneError, TerraceSpec,
     non_negative, positive,
@@ -12,6 +12,10 @@ use crate::config::scene::{
 use crate::models::terraced::PairTerraces;
 
 impl LjRodsSpec {
+    fn potential(&self, k: usize) -> Result<LjRod, SceneError> {
+        LjRod::new(self.epsilon, self.sigma, self.zeta).map_err(|e| potential_error(k, e))
+    }
+
     /// Rods with `ζ = 0`: Lennard-Jones spheres.
     pub fn as_spheres(&self) -> LennardJonesSpec {
         LennardJonesSpec {
@@ -81,18 +85,13 @@ impl Kind for LjRodsSpec {
         kt: f64,
         scale: f64,
     ) -> Result<PairTerraces<LjRod>, SceneError> {
-        let rod =
-            LjRod::new(self.epsilon, self.sigma, self.zeta).map_err(|e| potential_error(k, e))?;
+        let rod = self.potential(k)?;
         let prof = profile::rods(&rod).map_err(|e| terrace_error(k, e, scale))?;
         let map = terrace_map(k, &rod, Some(&prof), t, kt, scale)?;
-        PairTerraces::new(rod, map)
-            .map_err(|e| SceneError::invalid(format!("pair[{k}].terraces"), e.to_string()))
+        pair_terraces(k, PairTerraces::new(rod, map))
     }
 
-    fn smd(&self, (r_l, r_u): (f64, f64)) -> Result<Smoothed<LjRod>, SceneError> {
-        let rod =
-            LjRod::new(self.epsilon, self.sigma, self.zeta).map_err(|e| potential_error(0, e))?;
-        Smoothed::new(rod, r_l, r_u)
-            .map_err(|e| SceneError::invalid("smd.smoothing", e.to_string()))
+    fn smd(&self, window: (f64, f64)) -> Result<Smoothed<LjRod>, SceneError> {
+        smoothed(self.potential(0)?, window)
     }
 }

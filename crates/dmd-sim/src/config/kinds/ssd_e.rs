@@ -5,7 +5,7 @@ use potential::{SoftStickyDipole, SsdParameters};
 
 use super::Kind;
 use crate::analysis::output::Drawing;
-use crate::config::rods::{Water, plain_terrace_map, potential_error};
+use crate::config::rods::{Water, pair_terraces, plain_terrace_map, potential_error};
 use crate::config::scene::{
     Body, Describe, PotentialSpec, SceneError, SsdESpec, TerraceSpec, UnitSystem,
 };
@@ -88,8 +88,7 @@ impl Kind for SsdESpec {
         let water = Rigid(self.potential().map_err(|e| potential_error(k, e))?);
         let minimum = potential::RigidPairPotential::minimum(&water.0);
         let map = plain_terrace_map(k, minimum, t, kt, scale)?;
-        PairTerraces::new(water, map)
-            .map_err(|e| SceneError::invalid(format!("pair[{k}].terraces"), e.to_string()))
+        pair_terraces(k, PairTerraces::new(water, map))
     }
 
     fn smd(&self, _: (f64, f64)) -> Result<smd::Rigid<SoftStickyDipole>, SceneError> {

@@ -17,7 +17,7 @@ use potential::{
 
 use super::Kind;
 use crate::analysis::output::Drawing;
-use crate::config::rods::{plain_terrace_map, potential_error};
+use crate::config::rods::{pair_terraces, plain_terrace_map, potential_error, smoothed};
 use crate::config::scene::{
     Body, Describe, PotentialSpec, SceneError, StockmayerSpec, TerraceSpec, non_negative, positive,
 };
@@ -200,13 +200,11 @@ impl Kind for StockmayerSpec {
         let map = plain_terrace_map(k, p.minimum(), t, kt, scale)?;
         // The reach is found numerically over orientations: once for the outermost levels,
         // not for each of the hundreds up to the core.
-        PairTerraces::with_outer_reach(p, map)
-            .map_err(|e| SceneError::invalid(format!("pair[{k}].terraces"), e.to_string()))
+        pair_terraces(k, PairTerraces::with_outer_reach(p, map))
     }
 
-    fn smd(&self, (r_l, r_u): (f64, f64)) -> Result<Smoothed<Stockmayer>, SceneError> {
-        Smoothed::new(self.potential(0)?, r_l, r_u)
-            .map_err(|e| SceneError::invalid("smd.smoothing", e.to_string()))
+    fn smd(&self, window: (f64, f64)) -> Result<Smoothed<Stockmayer>, SceneError> {
+        smoothed(self.potential(0)?, window)
     }
 }
 
