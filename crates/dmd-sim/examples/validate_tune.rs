@@ -114,6 +114,9 @@ fn long_run(case: &Case, sets: &[String]) -> Result<[f64; 6], String> {
     let mut all = case.overrides.clone();
     all.extend(case.long.iter().cloned());
     all.extend(sets.iter().cloned());
+    // At the bath temperature throughout, as the tune's probes are.
+    let (scene, _) = Scene::load(&case.scene, &all).map_err(|e| e.to_string())?;
+    all.extend(tune::canonical_sets(&scene));
     let (scene, base) = Scene::load(&case.scene, &all).map_err(|e| e.to_string())?;
     let s = run_scene(&scene, &base, None, &mut Quiet).map_err(|e| e.to_string())?;
     // As the tune judges them: the smooth estimators where the scene has them.
@@ -149,8 +152,9 @@ fn validate(args: &Args, work: &Path, r: &mut Report, out: &mut String) -> Resul
          scene's full length: every knob at its recommended value, and every knob at half its \
          finest probed value (a reference finer than any the tune saw). Check: U/N and P of the \
          recommended run within the target of the finer reference, relative to |U/N| and to \
-         max(|P|, ρkT) as the tune measures them (for terraced rods, those of the smooth \
-         estimators: the continuous model along the run). `stepped-lj.toml` is tuned through \
+         max(|P|, ρkT) as the tune measures them (for terraces of a smooth potential, those of \
+         the smooth estimators: the continuous model along the run), both with the Andersen \
+         thermostat on in production as the tune's probes are. `stepped-lj.toml` is tuned through \
          `--set pair.0.steps= --set 'pair.0.potential={{kind=\"lennard-jones\", epsilon=1.0, \
          sigma=1.0}}' --set 'pair.0.terraces={{step=0.5, core=10.0}}'` (the same ΔV = ε/2 and \
          core; an explicit step table has no step to vary). Wall times on the shared 2-core \

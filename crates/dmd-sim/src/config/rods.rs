@@ -570,16 +570,13 @@ pub fn equipartitioned_omegas(axes: &[DVec3], inertia: &[f64], kt: f64, seed: u6
 }
 
 impl Scene {
-    /// Whether the event-driven engine runs this scene as terraced rods, Gay–Berne bodies or
-    /// rigid tops (`Terraced<P>`), whose smooth potential the estimators evaluate.
+    /// Whether the event-driven engine runs this scene on the terraces of a smooth potential
+    /// (rods, Gay–Berne bodies, tops, or Lennard-Jones spheres as radial steps), whose smooth
+    /// potential the estimators evaluate.
     pub fn has_terraced_smooth_potential(&self) -> bool {
         !self.has_bonds()
             && !self.has_sites()
-            && self
-                .pair
-                .first()
-                .and_then(|p| p.potential)
-                .is_some_and(|p| p.is_anisotropic())
+            && self.pair.first().is_some_and(|p| p.potential.is_some())
     }
 
     /// Whether a run of this scene evaluates the smooth estimators: `output.smooth_estimators`

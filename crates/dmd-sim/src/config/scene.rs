@@ -976,8 +976,8 @@ pub struct OutputSpec {
     /// An SVG plot next to each CSV file (default true).
     #[serde(default = "yes")]
     pub plots: bool,
-    /// Evaluate the smooth potential (`[smd] smoothing`) at every sample of a terraced run of
-    /// rods or Gay–Berne bodies: `potential_energy_per_body_smooth`, `pressure_smooth`
+    /// Evaluate the smooth potential (`[smd] smoothing`) at every sample of a run on the
+    /// terraces of a smooth potential: `potential_energy_per_body_smooth`, `pressure_smooth`
     /// (default: on for those scenes when `sample_interval` is given).
     pub smooth_estimators: Option<bool>,
     /// Samples between two evaluations of the smooth estimators (default
@@ -1440,7 +1440,7 @@ impl Scene {
             if !self.wants_smooth_estimators() {
                 return Err(SceneError::invalid(
                     "output.smooth_every",
-                    "only used with the smooth estimators (terraced rods or Gay–Berne bodies, \
+                    "only used with the smooth estimators (the terraces of a smooth potential, \
                      output.smooth_estimators not false)",
                 ));
             }
@@ -1449,9 +1449,10 @@ impl Scene {
             if !self.has_terraced_smooth_potential() {
                 return Err(SceneError::invalid(
                     "output.smooth_estimators",
-                    "the smooth estimators evaluate the continuous potential of terraced rods or \
-                     Gay–Berne bodies; this scene has none (stepped spheres, Lennard-Jones \
-                     steps and site molecules are not estimated)",
+                    "the smooth estimators evaluate the continuous potential of a scene on the \
+                     terraces of a smooth potential (pair.potential with pair.terraces); this \
+                     scene has none (explicit steps, site molecules and semi-flexible \
+                     molecules are not estimated)",
                 ));
             }
             if o.sample_interval.is_none() {

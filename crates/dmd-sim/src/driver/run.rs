@@ -607,6 +607,14 @@ fn set_up<G: Go>(
         layout,
         set_up_only,
     };
+    // Lennard-Jones spheres on terraces run as radial steps; their smooth potential is still
+    // the scene's.
+    if matches!(plan, Plan::Spheres(_)) && scene.has_terraced_smooth_potential() {
+        ctx.smooth.set(crate::config::kinds::radial_estimator(
+            scene,
+            config.lengths,
+        )?);
+    }
     if fault > 0.0 {
         // Checked with the scene: fault injection is for sphere scenes.
         let Plan::Spheres(potentials) = plan else {

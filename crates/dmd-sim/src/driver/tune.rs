@@ -18,7 +18,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use crate::analysis::output::{Line, OutputError, Plot, write_atomically, write_plot};
-use crate::config::scene::{Scene, SceneError};
+use crate::config::scene::{Scene, SceneError, ThermostatKind, ThermostatPhase};
 use crate::config::units::UnitNames;
 use crate::driver::reporting::{Quiet, RunError};
 use crate::driver::run::run_scene;
@@ -390,6 +390,25 @@ fn probe_overrides(
     )
 }
 
+/// The `--set` lines that keep the scene's Andersen thermostat on in production
+/// (`thermostat.during = "always"`), so that every probe samples the same temperature: in NVE
+/// production each run keeps the energy it ended equilibration with, and its temperature
+/// drifts from the bath's by a different few kelvin as U/N relaxes, which moves P by more
+/// than its error bar (the differences between probes would then measure the runs, not the
+/// knob). Empty for the smd engine (which thermostats during equilibration only) and for
+/// scenes without an Andersen thermostat or already thermostatted throughout.
+pub fn canonical_sets(scene: &Scene) -> Vec<String> {
+    let t = &scene.thermostat;
+    if scene.engine != Engine::Smd
+        && t.kind == ThermostatKind::Andersen
+        && t.during == ThermostatPhase::Equilibration
+    {
+        vec!["thermostat.during=always".to_owned()]
+    } else {
+        Vec::new()
+    }
+}
+
 /// Runs one probe of `text` (the scene file's text) with `overrides`.
 fn probe(text: &str, base: &Path, overrides: &[String], smooth: bool) -> Result<Probe, RunError> {
     let scene = Scene::from_str_with(text, overrides)?;
@@ -533,7 +552,14 @@ pub fn tune(
     ];
     let present = Scene::given_keys(&text, &options.overrides, &ASKED)?;
     let given = |key: &str| ASKED.iter().zip(&present).any(|(k, &p)| p && *k == key);
-    let (mut shorten, length) = probe_overrides(&given, &scene, options);
+    let (mut shorten, mut length) = probe_overrides(&given, &scene, options);
+    let canonical = canonical_sets(&scene);
+    if !canonical.is_empty() {
+        shorten.extend(canonical.iter().cloned());
+        length.push_str(
+            ", the Andersen thermostat on in production too (every probe at the bath temperature)",
+        );
+    }
     if smooth {
         // Every sample, so that short probes have enough for an error bar; the estimator's
         // cost per simulated time is the same for every probe and keeps their order of cost.

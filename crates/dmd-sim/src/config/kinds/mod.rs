@@ -184,3 +184,55 @@ pub fn plan(scene: &Scene, first: PotentialSpec) -> Result<Built, SceneError> {
     }
     first.visit(Build { scene, first })
 }
+
+/// The smooth estimator of a scene whose smooth potentials run as radial steps (Lennard-Jones
+/// spheres on terraces): the same estimator as for terraced bodies, over each pair table's
+/// smooth potential (`None` when the scene does not want one or its cut-off does not fit a box
+/// of `lengths`).
+///
+/// # Errors
+/// [`SceneError::Invalid`] naming the pair table, `output.smooth_estimators` or
+/// `smd.smoothing`.
+pub fn radial_estimator(
+    scene: &Scene,
+    lengths: glam::DVec3,
+) -> Result<Option<Box<dyn crate::analysis::smooth::Evaluate>>, SceneError> {
+    struct Estimate<'a> {
+        scene: &'a Scene,
+        lengths: glam::DVec3,
+    }
+    impl Visit for Estimate<'_> {
+        type Out = Result<Option<Box<dyn crate::analysis::smooth::Evaluate>>, SceneError>;
+        fn visit<K: Kind>(self, _: &K) -> Self::Out {
+            let scene = self.scene;
+            let scale = crate::config::units::Units::of(scene.units).energy;
+            let kt = scene.init.temperature;
+            let index = |n: &str| {
+                scene
+                    .species
+                    .iter()
+                    .position(|s| s.name == n)
+                    .expect("checked")
+            };
+            let mut tables: Vec<PairTable<K::Terraced>> = Vec::new();
+            for (k, p) in scene.pair.iter().enumerate() {
+                let kind = p
+                    .potential
+                    .as_ref()
+                    .and_then(K::select)
+                    .expect("checked: one kind per scene");
+                let t = p.terraces.as_ref().expect("checked");
+                let pair = (index(&p.species[0]), index(&p.species[1]));
+                tables.push((pair, kind.terraces(k, t, kt, scale)?));
+            }
+            <K::Terraced as Bodies>::estimator(scene, self.lengths, &tables)
+        }
+    }
+    if !scene.wants_smooth_estimators() {
+        return Ok(None);
+    }
+    let Some(first) = scene.pair.first().and_then(|p| p.potential) else {
+        return Ok(None);
+    };
+    first.visit(Estimate { scene, lengths })
+}
