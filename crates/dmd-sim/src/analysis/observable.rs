@@ -37,6 +37,8 @@ pub struct Rdf {
     /// Each bin's `g` of every evaluated configuration, blocked in sample order: the
     /// error of `g(r)` per bin.
     blocks: Vec<Blocks>,
+    /// The same for every partial `g_ab` (laid out as `partial`; empty for one species).
+    partial_blocks: Vec<Blocks>,
     /// The current configuration's counts (scratch, kept to save an allocation a sample).
     #[serde(skip)]
     scratch: Vec<u64>,
@@ -84,6 +86,7 @@ impl Rdf {
             volume: 0.0,
             members: Vec::new(),
             partial: Vec::new(),
+            partial_blocks: Vec::new(),
             blocks: vec![Blocks::default(); bins],
             scratch: Vec::new(),
         }
@@ -115,6 +118,7 @@ impl Rdf {
             }
             if kinds >= 2 {
                 self.partial = vec![0; kinds * (kinds + 1) / 2 * bins];
+                self.partial_blocks = vec![Blocks::default(); kinds * (kinds + 1) / 2 * bins];
             }
         }
         let kinds = self.members.len();
@@ -126,20 +130,39 @@ impl Rdf {
         let mut counts = std::mem::take(&mut self.scratch);
         counts.clear();
         counts.resize(bins, 0);
-        let partial = &mut self.partial;
+        // This configuration's partial counts follow the total's in the same scratch vector.
+        let per_pair = !self.partial.is_empty();
+        if per_pair {
+            counts.resize(bins + self.partial.len(), 0);
+        }
         for_each_pair(pos, l, self.r_max, |i, j, d| {
             let r2 = d.length_squared();
             if r2 < r2max {
                 let k = (r2.sqrt() * inv_w) as usize;
                 if k < bins {
                     counts[k] += 1;
-                    if !partial.is_empty() {
+                    if per_pair {
                         let p = pair_index(species[i] as usize, species[j] as usize, kinds);
-                        partial[p * bins + k] += 1;
+                        counts[bins + p * bins + k] += 1;
                     }
                 }
             }
         });
+        if per_pair {
+            for a in 0..kinds {
+                for b in a..kinds {
+                    let p = pair_index(a, b, kinds);
+                    let pairs = self.pairs_of(a, b);
+                    for k in 0..bins {
+                        let c = counts[bins + p * bins + k];
+                        self.partial[p * bins + k] += c;
+                        let ideal = pairs * self.shell_volume(k) / self.volume;
+                        self.partial_blocks[p * bins + k].push(ratio(c, ideal));
+                    }
+                }
+            }
+            counts.truncate(bins);
+        }
         // This configuration's g in every bin: `table` is their mean (same volume each time).
         let pairs = 0.5 * n as f64 * (n as f64 - 1.0);
         self.blocks.resize_with(bins, Blocks::default);
@@ -149,6 +172,16 @@ impl Rdf {
             self.blocks[k].push(ratio(c, ideal));
         }
         self.scratch = counts;
+    }
+
+    /// Pairs of bodies of species `a` and `b`.
+    fn pairs_of(&self, a: usize, b: usize) -> f64 {
+        let (na, nb) = (self.members[a] as f64, self.members[b] as f64);
+        if a == b {
+            0.5 * na * (na - 1.0)
+        } else {
+            na * nb
+        }
     }
 
     /// Volume of the shell of bin `k`.
@@ -200,12 +233,7 @@ impl Rdf {
         let mut out = Vec::new();
         for a in 0..kinds {
             for b in a..kinds {
-                let (na, nb) = (self.members[a] as f64, self.members[b] as f64);
-                let pairs = if a == b {
-                    0.5 * na * (na - 1.0)
-                } else {
-                    na * nb
-                };
+                let pairs = self.pairs_of(a, b);
                 let p = pair_index(a, b, kinds);
                 let rows = (0..bins)
                     .map(|k| {
@@ -213,7 +241,14 @@ impl Rdf {
                         (r, ratio(self.partial[p * bins + k], pairs * shell))
                     })
                     .collect();
-                out.push(PartialRdf { a, b, rows });
+                let errors = (0..bins)
+                    .map(|k| {
+                        self.partial_blocks
+                            .get(p * bins + k)
+                            .map_or(f64::NAN, |b| b.estimate().error)
+                    })
+                    .collect();
+                out.push(PartialRdf { a, b, rows, errors });
             }
         }
         out
@@ -229,6 +264,8 @@ pub struct PartialRdf {
     pub b: usize,
     /// Rows `(r at bin centre, g_ab(r))`.
     pub rows: Vec<(f64, f64)>,
+    /// The block-average error of each row, as [`Rdf::errors`].
+    pub errors: Vec<f64>,
 }
 
 /// `count / ideal`, 0 where the ideal count is 0 (a species of one body, an empty shell).
@@ -788,9 +825,11 @@ mod tests {
         let partials = rdf.partials();
         assert_eq!(partials.len(), 6);
         let n = 300.0f64;
+        // The 200 configurations are independent: each partial's error is its scatter.
+        let (mut chi2, mut dof) = (0.0, 0);
         for (k, &(r, g)) in total.iter().enumerate() {
             let mut sum = 0.0;
-            for PartialRdf { a, b, rows } in &partials {
+            for PartialRdf { a, b, rows, .. } in &partials {
                 let (na, nb) = (rdf.members()[*a] as f64, rdf.members()[*b] as f64);
                 let pairs = if a == b {
                     na * (na - 1.0)
@@ -813,9 +852,21 @@ mod tests {
                 "bin {k}: {sum} vs {g}"
             );
             if r > 1.5 {
+                for p in &partials {
+                    let z = (p.rows[k].1 - 1.0) / p.errors[k];
+                    chi2 += z * z;
+                    dof += 1;
+                }
+            }
+            if r > 1.5 {
                 assert!((g - 1.0).abs() < 0.02, "g({r}) = {g}");
             }
         }
+        let reduced = chi2 / dof as f64;
+        assert!(
+            (0.6..1.6).contains(&reduced),
+            "χ²/dof of the partials {reduced}"
+        );
     }
 
     #[test]

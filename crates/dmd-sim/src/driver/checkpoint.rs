@@ -421,6 +421,7 @@ pub fn check_observers(
         if !(same(&s, &f, &["every", "r_max", "width"])
             && len(&s, "counts") == Some(bins)
             && len(&s, "partial") == Some(partial)
+            && len(&s, "partial_blocks") == Some(partial)
             && members_ok
             && sampled_ok
             && num(&s, "seen").is_some_and(|seen| seen >= samples))

@@ -296,8 +296,10 @@ pub(crate) fn write_observables(
         )];
         for p in partials {
             header.push(format!("g_{}_{}", name(p.a), name(p.b)));
-            for (row, &(_, g)) in rows.iter_mut().zip(&p.rows) {
+            header.push(format!("g_{}_{}_error", name(p.a), name(p.b)));
+            for ((row, &(_, g)), &e) in rows.iter_mut().zip(&p.rows).zip(&p.errors) {
                 row.push(g);
+                row.push(e);
             }
             curves.push(Line::new(format!("g {}–{}", name(p.a), name(p.b)), p.rows));
         }

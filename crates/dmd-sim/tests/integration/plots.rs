@@ -256,7 +256,20 @@ fn a_mixture_writes_partial_rdfs_whose_weighted_sum_is_the_total() {
     );
     assert_eq!(s["n_bodies"].as_u64(), Some(256));
     let (header, rows) = read_csv(&dir.join("rdf.csv"));
-    assert_eq!(header, ["r", "g", "g_error", "g_S_S", "g_S_L", "g_L_L"]);
+    assert_eq!(
+        header,
+        [
+            "r",
+            "g",
+            "g_error",
+            "g_S_S",
+            "g_S_S_error",
+            "g_S_L",
+            "g_S_L_error",
+            "g_L_L",
+            "g_L_L_error"
+        ]
+    );
     let n = ns + nl;
     let w = [
         ns * (ns - 1.0) / (n * (n - 1.0)),
@@ -265,7 +278,12 @@ fn a_mixture_writes_partial_rdfs_whose_weighted_sum_is_the_total() {
     ];
     let mut seen = 0;
     for row in &rows {
-        let sum: f64 = w.iter().zip(&row[3..]).map(|(w, g)| w * g).sum();
+        let partials = [row[3], row[5], row[7]];
+        let sum: f64 = w.iter().zip(&partials).map(|(w, g)| w * g).sum();
+        // Each partial's error is there wherever its g is (the blocks of 400 samples).
+        for e in [row[4], row[6], row[8]] {
+            assert!(e.is_finite() && e >= 0.0, "{row:?}");
+        }
         assert!(
             (sum - row[1]).abs() <= 1e-12 * row[1].max(1.0),
             "{row:?}: {sum}"
@@ -279,7 +297,8 @@ fn a_mixture_writes_partial_rdfs_whose_weighted_sum_is_the_total() {
         let width = rows[1][0] - rows[0][0];
         for (k, core) in [1.0, 1.3, 1.6].into_iter().enumerate() {
             if r + 0.5 * width < core {
-                assert_eq!(row[3 + k], 0.0, "{} at r = {r}", header[3 + k]);
+                assert_eq!(row[3 + 2 * k], 0.0, "{} at r = {r}", header[3 + 2 * k]);
+                assert_eq!(row[4 + 2 * k], 0.0, "{} at r = {r}", header[4 + 2 * k]);
             }
         }
     }
