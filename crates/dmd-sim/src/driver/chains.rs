@@ -107,7 +107,8 @@ pub struct Estimate {
     pub mean: f64,
     /// Standard error from the scatter between chains (`null` with one chain).
     pub error: Option<f64>,
-    /// Block-average errors of the chains combined (HMC chain averages only).
+    /// The chains' own block-average errors combined, `√Σσ²/C` (quantities whose summary
+    /// has an `_error`, when every chain has one).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub block_error: Option<f64>,
     /// Each chain's value.
@@ -136,17 +137,33 @@ pub struct Ensemble {
     pub jobs: Vec<String>,
 }
 
-/// Summary fields aggregated (dotted paths into `summary.json`), and for HMC chain averages
-/// the path of their block error.
+/// Summary fields aggregated (dotted paths into `summary.json`), and the path of each job's own
+/// block-average error of it where the summary has one.
 const QUANTITIES: &[(&str, Option<&str>)] = &[
-    ("temperature", None),
-    ("pressure", None),
+    ("temperature", Some("temperature_error")),
+    (
+        "translational_temperature",
+        Some("translational_temperature_error"),
+    ),
+    (
+        "rotational_temperature",
+        Some("rotational_temperature_error"),
+    ),
+    ("pressure", Some("pressure_error")),
     ("compressibility", None),
-    ("potential_energy_per_body", None),
+    (
+        "potential_energy_per_body",
+        Some("potential_energy_per_body_error"),
+    ),
+    (
+        "potential_energy_per_body_smooth",
+        Some("potential_energy_per_body_smooth_error"),
+    ),
+    ("pressure_smooth", Some("pressure_smooth_error")),
     ("collision_rate", None),
     ("mean_free_time", None),
-    ("diffusion_msd", None),
-    ("diffusion_vacf", None),
+    ("diffusion_msd", Some("diffusion_msd_error")),
+    ("diffusion_vacf", Some("diffusion_vacf_error")),
     ("hmc.acceptance_rate", None),
     ("hmc.exp_minus_beta_delta_h", None),
     (
@@ -562,6 +579,7 @@ fn write_table(path: &Path, e: &Ensemble) -> Result<(), OutputError> {
     for n in &names {
         header.push((*n).clone());
         header.push(format!("{n}_error"));
+        header.push(format!("{n}_block_error"));
     }
     let rows: Vec<Vec<f64>> = e
         .points
@@ -579,6 +597,7 @@ fn write_table(path: &Path, e: &Ensemble) -> Result<(), OutputError> {
                 let q = &p.quantities[*n];
                 row.push(q.mean);
                 row.push(q.error.unwrap_or(f64::NAN));
+                row.push(q.block_error.unwrap_or(f64::NAN));
             }
             row
         })

@@ -189,3 +189,45 @@ fn jobs_run_one_by_one_give_the_aggregate_of_run_ensemble() {
     let _ = std::fs::remove_dir_all(together);
     let _ = std::fs::remove_dir_all(apart);
 }
+
+/// Plain event-driven chains: each chain's block-average errors (`_error` in its summary) are
+/// combined into `block_error`, which estimates what the scatter between the chains does.
+#[test]
+fn the_chains_block_errors_are_combined_and_agree_with_their_scatter() {
+    let text = SCENE
+        .replace("[hmc]\nsegment_time = 0.5\nsegments = 100\n", "")
+        .replace("count = 4", "count = 6")
+        .replace(
+            "key = \"hmc.temperature\"\nvalues = [1.5, 3.0]",
+            "key = \"init.temperature\"\nvalues = [1.5]",
+        )
+        + "[output]\nsample_interval = 0.05\n";
+    let text = text.replace(
+        "equilibration_events = 3000",
+        "equilibration_events = 3000\nevents = 40000",
+    );
+    let scene = Scene::from_str_with(&text, &[]).unwrap();
+    let src = SceneSource {
+        text: text.clone(),
+        ..source()
+    };
+    let out = dir("blocks");
+    let e = run_ensemble(&scene, &src, &out, Some(2), None, &|_, _| {}).unwrap();
+    for name in ["temperature", "pressure", "potential_energy_per_body"] {
+        let q = &e.points[0].quantities[name];
+        let (err, block) = (q.error.unwrap(), q.block_error.unwrap());
+        // Each estimate from 6 chains is uncertain by ~30 %, hence the factor 3.
+        assert!(
+            err > 0.0 && block > 0.0 && err / block < 3.0 && block / err < 3.0,
+            "{name}: scatter {err}, blocks {block}"
+        );
+    }
+    let csv = std::fs::read_to_string(out.join("ensemble.csv")).unwrap();
+    assert!(
+        csv.lines()
+            .next()
+            .unwrap()
+            .contains("temperature_error,temperature_block_error")
+    );
+    let _ = std::fs::remove_dir_all(out);
+}
