@@ -127,6 +127,8 @@ pub struct Line {
     pub dashed: bool,
     /// A line at the curve's mean with its error band, in the curve's colour.
     pub mean: Option<Mean>,
+    /// The error of each point (empty: none), drawn as a shaded band of ± it around the curve.
+    pub errors: Vec<f64>,
 }
 
 impl Line {
@@ -137,7 +139,33 @@ impl Line {
             points,
             dashed: false,
             mean: None,
+            errors: Vec::new(),
         }
+    }
+
+    /// The same line with a shaded band of ± `errors` (one per point; non-finite ones leave
+    /// a gap).
+    pub fn with_errors(mut self, errors: Vec<f64>) -> Self {
+        self.errors = errors;
+        self
+    }
+
+    /// The band's stretches of consecutive points with a finite point and error, each as
+    /// `(x, y − e, y + e)`.
+    fn band(&self) -> Vec<Vec<(f64, f64, f64)>> {
+        let mut out: Vec<Vec<(f64, f64, f64)>> = Vec::new();
+        let mut run = Vec::new();
+        for (&(x, y), &e) in self.points.iter().zip(&self.errors) {
+            if x.is_finite() && y.is_finite() && e.is_finite() {
+                run.push((x, y - e.abs(), y + e.abs()));
+            } else if !run.is_empty() {
+                out.push(std::mem::take(&mut run));
+            }
+        }
+        if !run.is_empty() {
+            out.push(run);
+        }
+        out
     }
 }
 
@@ -176,6 +204,9 @@ fn plot_range(curves: &[Line]) -> Option<(f64, f64, f64, f64)> {
         if let Some(m) = c.mean.as_ref().filter(|m| m.value.is_finite()) {
             let e = m.error.filter(|e| e.is_finite()).unwrap_or(0.0).abs();
             (y0, y1) = (y0.min(m.value - e), y1.max(m.value + e));
+        }
+        for &(_, lo, hi) in c.band().iter().flatten() {
+            (y0, y1) = (y0.min(lo), y1.max(hi));
         }
     }
     if !any {
@@ -366,6 +397,18 @@ pub fn write_plot(path: &Path, plot: &Plot) -> Result<(), OutputError> {
             } else {
                 color.stroke_width(2)
             };
+            // The error band under the curve: the polygon along y + e and back along y − e.
+            for stretch in c.band() {
+                let outline: Vec<(f64, f64)> = stretch
+                    .iter()
+                    .map(|&(x, _, hi)| (x, hi))
+                    .chain(stretch.iter().rev().map(|&(x, lo, _)| (x, lo)))
+                    .collect();
+                chart.draw_series(std::iter::once(Polygon::new(
+                    outline,
+                    color.mix(0.2).filled(),
+                )))?;
+            }
             let pts: Vec<(f64, f64)> = c.points.iter().filter(finite).copied().collect();
             let anno = if c.dashed {
                 chart.draw_series(DashedLineSeries::new(pts, 8, 5, style))?

@@ -286,14 +286,17 @@ pub(crate) fn write_observables(
             .zip(rdf.errors())
             .map(|(&(r, g), e)| vec![r, g, e])
             .collect();
-        let mut curves = vec![Line::new(
-            if partials.is_empty() {
-                String::new()
-            } else {
-                "g(r), all pairs".to_owned()
-            },
-            t,
-        )];
+        let mut curves = vec![
+            Line::new(
+                if partials.is_empty() {
+                    String::new()
+                } else {
+                    "g(r), all pairs".to_owned()
+                },
+                t,
+            )
+            .with_errors(rdf.errors()),
+        ];
         for p in partials {
             header.push(format!("g_{}_{}", name(p.a), name(p.b)));
             header.push(format!("g_{}_{}_error", name(p.a), name(p.b)));
@@ -318,7 +321,8 @@ pub(crate) fn write_observables(
     if let Some(c) = &obs.correlations {
         if c.wants_msd() {
             let t = c.msd_table();
-            let mut curves = vec![Line::new("⟨|r(t) − r(0)|²⟩", t.clone())];
+            let mut curves =
+                vec![Line::new("⟨|r(t) − r(0)|²⟩", t.clone()).with_errors(c.msd_errors())];
             if let Some((a, b)) = msd_fit(&t) {
                 let from = t[t.len() / 2].0;
                 let to = t.last().map_or(from, |p| p.0);
@@ -327,6 +331,7 @@ pub(crate) fn write_observables(
                     points: vec![(from, a + b * from), (to, a + b * to)],
                     dashed: true,
                     mean: None,
+                    errors: Vec::new(),
                 });
             }
             table(
@@ -364,19 +369,22 @@ pub(crate) fn write_observables(
                     "Velocity autocorrelation (normalised)",
                     format!("t ({})", au.time),
                     "⟨v(0)·v(t)⟩ / ⟨v²⟩ (dimensionless)".to_owned(),
-                    vec![Line::new(
-                        match c.diffusion_from_vacf() {
-                            Some(d) => format!(
-                                "⟨v²⟩ = {} {}, Green–Kubo D = {} {}",
-                                sig(c0),
-                                au.speed_squared,
-                                sig(d),
-                                au.diffusion
-                            ),
-                            None => format!("⟨v²⟩ = {} {}", sig(c0), au.speed_squared),
-                        },
-                        t.iter().map(|&(x, y)| (x, y / c0)).collect(),
-                    )],
+                    vec![
+                        Line::new(
+                            match c.diffusion_from_vacf() {
+                                Some(d) => format!(
+                                    "⟨v²⟩ = {} {}, Green–Kubo D = {} {}",
+                                    sig(c0),
+                                    au.speed_squared,
+                                    sig(d),
+                                    au.diffusion
+                                ),
+                                None => format!("⟨v²⟩ = {} {}", sig(c0), au.speed_squared),
+                            },
+                            t.iter().map(|&(x, y)| (x, y / c0)).collect(),
+                        )
+                        .with_errors(c.vacf_errors().iter().map(|e| e / c0).collect()),
+                    ],
                 )),
             )?;
         }
@@ -393,13 +401,18 @@ pub(crate) fn write_observables(
                     "Long-axis orientational autocorrelation",
                     format!("t ({})", au.time),
                     "correlation (dimensionless)".to_owned(),
-                    vec![
-                        Line::new("⟨s(0)·s(t)⟩", t.iter().map(|&(x, a, _)| (x, a)).collect()),
-                        Line::new(
-                            "⟨P₂(s(0)·s(t))⟩",
-                            t.iter().map(|&(x, _, b)| (x, b)).collect(),
-                        ),
-                    ],
+                    {
+                        let errors = c.oacf_errors();
+                        vec![
+                            Line::new("⟨s(0)·s(t)⟩", t.iter().map(|&(x, a, _)| (x, a)).collect())
+                                .with_errors(errors.iter().map(|e| e.0).collect()),
+                            Line::new(
+                                "⟨P₂(s(0)·s(t))⟩",
+                                t.iter().map(|&(x, _, b)| (x, b)).collect(),
+                            )
+                            .with_errors(errors.iter().map(|e| e.1).collect()),
+                        ]
+                    },
                 )),
             )?;
         }
@@ -465,6 +478,7 @@ pub(crate) fn write_observables(
                         value: mean,
                         error,
                     }),
+                    errors: Vec::new(),
                 }],
             );
             let path = dir.join("series-pressure.svg");
@@ -508,6 +522,7 @@ fn energy_plot(
             value,
             error,
         }),
+        errors: Vec::new(),
     };
     let kinetic = column(|r| r.kinetic);
     let no_potential = rows.iter().all(|r| r.potential == 0.0);

@@ -205,6 +205,65 @@ fn rods_plots_carry_units_and_name_the_system() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// The correlation functions and g(r) carry their block-average errors as translucent bands
+/// around the curves (where a point has an error: 16 time origins or configurations).
+#[test]
+fn correlation_and_rdf_plots_draw_their_error_bands() {
+    const FLUID: &str = r#"
+version = 1
+seed = 9
+[box]
+density = 0.5
+[[species]]
+name = "A"
+count = 108
+[[pair]]
+species = ["A", "A"]
+steps = [[1.0, inf], [1.5, -0.5]]
+[init]
+positions = "fcc"
+temperature = 1.5
+[run]
+time = 20.0
+[output]
+sample_interval = 0.05
+rdf = { bins = 30, r_max = 2.5, every = 1 }
+msd = { max_lag = 0.5 }
+vacf = { max_lag = 0.5 }
+"#;
+    let dir = scratch("plots-bands");
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("fluid.toml");
+    std::fs::write(&file, FLUID).unwrap();
+    let out = dir.join("out");
+    let status = std::process::Command::new(env!("CARGO_BIN_EXE_dmd"))
+        .args(["run", "--quiet", "--out"])
+        .arg(&out)
+        .arg(&file)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    for (file, csv) in [
+        ("msd", "msd_error"),
+        ("vacf", "vacf_error"),
+        ("rdf", "g_error"),
+    ] {
+        let (header, rows) = read_csv(&out.join(format!("{file}.csv")));
+        let col = header.iter().position(|h| h == csv).unwrap();
+        assert!(
+            rows.iter().any(|r| r[col].is_finite() && r[col] > 0.0),
+            "{file}: no errors"
+        );
+        let svg = std::fs::read_to_string(out.join(format!("{file}.svg"))).unwrap();
+        assert!(
+            svg.lines()
+                .any(|l| l.starts_with("<polygon") && l.contains("opacity=\"0.2\"")),
+            "no error band in {file}.svg"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn smd_rods_plots_carry_units_and_name_the_system() {
     let dir = scratch("plots-rods-smd");
