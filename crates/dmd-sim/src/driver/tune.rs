@@ -286,10 +286,13 @@ pub fn knobs(scene: &Scene) -> Result<Vec<Knob>, TuneError> {
             _ => {}
         }
     }
-    let searched = scene
-        .pair
-        .iter()
-        .any(|p| p.potential.is_some_and(|q| q.is_anisotropic()));
+    // Root searches: terraced anisotropic bodies, rigid site molecules and semi-flexible ones.
+    let searched = scene.has_sites()
+        || scene.has_bonds()
+        || scene
+            .pair
+            .iter()
+            .any(|p| p.potential.is_some_and(|q| q.is_anisotropic()));
     if let Some(s) = scene.search.as_ref().filter(|_| searched)
         && let Some(step) = s.max_step
     {
@@ -301,6 +304,19 @@ pub fn knobs(scene: &Scene) -> Result<Vec<Knob>, TuneError> {
                 Vec::new()
             },
             label: "search step".to_owned(),
+            unit: names.time.to_owned(),
+            value: step,
+        });
+    }
+    if scene.has_bonds() {
+        // The RATTLE step of the internal motion between events: the scene's, or its default.
+        let internal = scene.internal();
+        let plan = crate::config::flexible_scene::FlexiblePlan::of(&internal)?;
+        let step = crate::config::flexible_scene::rattle_settings(&internal, &plan).step;
+        knobs.push(Knob {
+            key: "rattle.step".to_owned(),
+            linked: Vec::new(),
+            label: "RATTLE step".to_owned(),
             unit: names.time.to_owned(),
             value: step,
         });

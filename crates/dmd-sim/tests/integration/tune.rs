@@ -125,3 +125,33 @@ fn tune_refuses_bad_targets_and_scenes_without_a_knob() {
     assert_eq!(o.status.code(), Some(2));
     assert!(!Path::new(out).join("tune.csv").exists());
 }
+
+/// Semi-flexible molecules are tuned in their search step and their RATTLE step (the scene's,
+/// or the default the run would use when `[rattle]` does not give it); rigid site molecules in
+/// their search step.
+#[test]
+fn molecules_are_tuned_in_their_search_and_rattle_steps() {
+    use dmd_sim::scene::Scene;
+    use dmd_sim::tune::knobs;
+    let chains = crate::support::scenes_dir().join("flexible-chains.toml");
+    let (scene, _) = Scene::load(&chains, &[]).unwrap();
+    let k = knobs(&scene).unwrap();
+    let keys: Vec<(&str, f64)> = k.iter().map(|k| (k.key.as_str(), k.value)).collect();
+    assert_eq!(keys, [("search.max_step", 0.02), ("rattle.step", 0.005)]);
+    // Without `rattle.step`: 0.01 × the shortest bond (0.6) / √(kT/m) at kT = 1.5, m = 1.
+    let (scene, _) = Scene::load(&chains, &["rattle.step=".to_owned()]).unwrap();
+    let rattle = knobs(&scene).unwrap().pop().unwrap();
+    assert_eq!(rattle.key, "rattle.step");
+    assert!(
+        (rattle.value - 0.01 * 0.6 / 1.5f64.sqrt()).abs() < 1e-12,
+        "{rattle:?}"
+    );
+    let sites = crate::support::scenes_dir().join("benzene-like.toml");
+    let (scene, _) = Scene::load(&sites, &["search.max_step=0.004".to_owned()]).unwrap();
+    let k = knobs(&scene).unwrap();
+    assert!(
+        k.iter()
+            .any(|k| k.key == "search.max_step" && k.value == 0.004),
+        "{k:?}"
+    );
+}
