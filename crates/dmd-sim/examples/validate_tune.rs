@@ -117,6 +117,10 @@ fn long_run(case: &Case, sets: &[String]) -> Result<[f64; 6], String> {
     // At the bath temperature throughout, as the tune's probes are.
     let (scene, _) = Scene::load(&case.scene, &all).map_err(|e| e.to_string())?;
     all.extend(tune::canonical_sets(&scene));
+    // The smooth estimators at every sample, as in the probes, so that they carry an error.
+    if scene.wants_smooth_estimators() {
+        all.push("output.smooth_every=1".to_owned());
+    }
     let (scene, base) = Scene::load(&case.scene, &all).map_err(|e| e.to_string())?;
     let s = run_scene(&scene, &base, None, &mut Quiet).map_err(|e| e.to_string())?;
     // As the tune judges them: the smooth estimators where the scene has them.
