@@ -288,7 +288,7 @@ pub fn check_setup(
     overrides: &[String],
 ) -> Result<(), RunError> {
     if scene.engine == crate::driver::smd_engine::Engine::Smd {
-        return Ok(());
+        return crate::driver::smd_engine::check_setup(scene, base);
     }
     let points = scene.sweep.as_ref().map_or(1, |s| s.values.len());
     for k in 0..points {
