@@ -43,7 +43,7 @@ use crate::config::init::{
     read_orientations, read_xyz, rod_semi_axes,
 };
 use crate::config::kinds::{Kind, Visit};
-use crate::config::rods::{equipartitioned_omegas, random_axes, tops_start};
+use crate::config::rods::{equipartitioned_omegas, random_axes, rotor_omegas, tops_start};
 pub use crate::config::scene::{Engine, SmdSpec, SmoothingSpec};
 use crate::config::scene::{
     Orientations, Positions, Scene, SceneError, ThermostatKind, UnitSystem, Velocities,
@@ -377,11 +377,7 @@ fn go(
         };
         let omegas = match file_omegas {
             // A linear rotor spins about no axis but its short ones.
-            Some(w) => w
-                .iter()
-                .zip(&axes)
-                .map(|(&w, &a)| w - w.dot(a) * a)
-                .collect(),
+            Some(w) => rotor_omegas(scene, &w, &axes)?,
             None => equipartitioned_omegas(&axes, &vec![inertia; n], kt, scene.seed),
         };
         let l = omegas.iter().map(|w| *w * inertia).collect();

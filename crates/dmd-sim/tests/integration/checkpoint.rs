@@ -762,6 +762,26 @@ fn forged_checkpoints_with_valid_crcs_are_refused_as_states() {
     let mut b = c.clone();
     b.sim.model_extra[0] *= 2.0;
     refused(&d, "rod-axis", &seal(&b), "body 0 cannot be restored");
+    // A rod spinning about its own axis: ω given a component along the axis (parts 7..10 are
+    // ω, 0..3 the axis), which no linear rotor has.
+    let mut b = c.clone();
+    let axis = glam::DVec3::from_slice(&b.sim.model_extra[..3]);
+    for (k, a) in axis.to_array().iter().enumerate() {
+        b.sim.model_extra[7 + k] += 0.5 * a;
+    }
+    refused(
+        &d,
+        "rod-spinning-about-its-axis",
+        &seal(&b),
+        "body 0 cannot be restored: its angular velocity",
+    );
+    refused(
+        &d,
+        "rod-spinning-about-its-axis-why",
+        &seal(&b),
+        "along the rod's axis: a rod turns only about its short axes, so its angular velocity \
+         must be perpendicular to its axis",
+    );
     let _ = std::fs::remove_dir_all(d);
 
     // An HMC chain whose ΔH histogram lost a bin, or whose counts disagree.
