@@ -317,6 +317,19 @@ pub fn check_setup(
     Ok(())
 }
 
+/// The fewest events between re-basings by default (the default is `100 N` within this and
+/// [`MAX_REBASE_EVENTS`]). A signal stops a run at its next re-basing, so the interval is also
+/// how long a stop can take: 10⁶ events of spheres or rods take about a second; an event of
+/// rigid-site or semi-flexible molecules costs tens of times more (site searches, RATTLE), so
+/// theirs is 10⁴, and a re-basing still costs about 1 % of the run (every pair predicted once
+/// against `100 N` events).
+fn fewest_rebase_events(plan: &Plan) -> u64 {
+    match plan {
+        Plan::Sites(_) | Plan::Flexible(_) => 10_000,
+        Plan::Spheres(_) | Plan::Terraced(_) => 1_000_000,
+    }
+}
+
 /// What a scene's simulation is built with besides its state ([`build_simulation`]).
 #[derive(Clone, Debug)]
 pub struct Built {
@@ -547,7 +560,7 @@ fn set_up<G: Go>(
         rebase_events: scene
             .run
             .rebase_events
-            .unwrap_or_else(|| (100 * n as u64).clamp(1_000_000, MAX_REBASE_EVENTS)),
+            .unwrap_or_else(|| (100 * n as u64).clamp(fewest_rebase_events(&plan), MAX_REBASE_EVENTS)),
         seed: scene.seed.wrapping_add(0x7e57_0000_0000_0001),
         debug_check_events: (n as u64).max(1000),
         skin,
