@@ -1117,7 +1117,21 @@ impl Context<'_> {
             ));
         }
         if o.series {
-            observers.series = Some(Series::default());
+            // Written to series.csv as it grows; a resumed run continues the file where its
+            // checkpoint left it (the rows after it, from the stopped run, are cut off).
+            let path = self.out.map(|dir| dir.join("series.csv"));
+            let units = self.units.series();
+            observers.series = Some(match resume {
+                Some((_, c)) if !fresh_production => Series::resumed(
+                    path.as_deref(),
+                    units,
+                    &c.observers.series.clone().unwrap_or_default(),
+                )?,
+                _ => match &path {
+                    Some(p) => Series::streamed(p, units)?,
+                    None => Series::default(),
+                },
+            });
         }
         if o.sample_interval.is_some() {
             observers.samples = Some(crate::analysis::smooth::Samples::default());
@@ -1211,7 +1225,6 @@ impl Context<'_> {
             })?;
             observers.rdf = c.observers.rdf.clone();
             observers.correlations = c.observers.correlations.clone();
-            observers.series = c.observers.series.clone();
             observers.samples = c.observers.samples.clone();
         }
         let (k0, e0, p0, p_scale) = run.record.start.expect("set when production starts");
@@ -1588,6 +1601,10 @@ impl Driver {
             Some(g) => Some(g.mark()?),
             None => None,
         };
+        let series = match &mut observers.series {
+            Some(s) => Some(s.mark()?),
+            None => None,
+        };
         let chain = &self.chain;
         self.saver.save(self.events, |source, every| {
             Ok(Checkpoint {
@@ -1599,7 +1616,7 @@ impl Driver {
                 observers: ObserverState {
                     rdf: observers.rdf.clone(),
                     correlations: observers.correlations.clone(),
-                    series: observers.series.clone(),
+                    series,
                     trajectory,
                     gsd,
                     samples: observers.samples.clone(),

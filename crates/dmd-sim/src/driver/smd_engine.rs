@@ -612,7 +612,10 @@ impl Job<'_> {
             ));
         }
         if o.series {
-            observers.series = Some(Series::default());
+            observers.series = Some(match self.out {
+                Some(dir) => Series::streamed(&dir.join("series.csv"), self.units.series())?,
+                None => Series::default(),
+            });
         }
         if let (Some(_), Some(dir)) = (&o.trajectory, self.out) {
             // Drawn as the event-driven engine draws the same scene.
