@@ -1309,7 +1309,10 @@ mod tests {
         }
         s.mark().unwrap();
         drop(s);
-        assert!(!streamed.exists(), "only the temporary file exists until finished");
+        assert!(
+            !streamed.exists(),
+            "only the temporary file exists until finished"
+        );
         let mut s = CsvStream::reopen(&streamed, mark).unwrap();
         for r in &rows[20..] {
             s.write_row(r);

@@ -405,7 +405,11 @@ pub(crate) fn write_observables(
     // `series.csv` was written as the run went; the plots read it back.
     if let Some(path) = obs.series.take().map(|s| s.finish()).transpose()?.flatten() {
         files.push("series.csv".into());
-        let rows = if plots { read_series(&path)? } else { Vec::new() };
+        let rows = if plots {
+            read_series(&path)?
+        } else {
+            Vec::new()
+        };
         if plots {
             let x_label = format!("t ({})", au.time);
             if let Some(p) = energy_plot(&rows, info, au) {

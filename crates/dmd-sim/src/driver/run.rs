@@ -557,10 +557,9 @@ fn set_up<G: Go>(
         None => choose_skin(scene, plan.reach(), hard, &config)?,
     };
     let mut settings = LoopSettings {
-        rebase_events: scene
-            .run
-            .rebase_events
-            .unwrap_or_else(|| (100 * n as u64).clamp(fewest_rebase_events(&plan), MAX_REBASE_EVENTS)),
+        rebase_events: scene.run.rebase_events.unwrap_or_else(|| {
+            (100 * n as u64).clamp(fewest_rebase_events(&plan), MAX_REBASE_EVENTS)
+        }),
         seed: scene.seed.wrapping_add(0x7e57_0000_0000_0001),
         debug_check_events: (n as u64).max(1000),
         skin,

@@ -222,9 +222,7 @@ impl Rotor for LinearRotor {
         } else {
             DVec3::ZERO
         };
-        if (p[6] - rate).abs() > tol * rate
-            || (v - v_expected).length() > tol
-        {
+        if (p[6] - rate).abs() > tol * rate || (v - v_expected).length() > tol {
             return Err(format!(
                 "its rotation rate {:.3e} and axis velocity do not follow from its angular \
                  velocity (|ω| = {rate:.3e})",

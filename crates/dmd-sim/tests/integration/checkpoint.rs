@@ -820,12 +820,22 @@ fn the_series_is_streamed_and_a_resume_continues_it_without_duplicates_or_gaps()
     let partial = crashed.join("series.csv.partial");
     let text = std::fs::read_to_string(&partial).unwrap();
     assert_eq!(text.len() as u64, state.bytes);
-    assert_eq!(text.lines().count() as u64, state.rows + 1, "header and rows");
+    assert_eq!(
+        text.lines().count() as u64,
+        state.rows + 1,
+        "header and rows"
+    );
     assert!(state.rows > 10, "{state:?}");
     let whole = std::fs::read_to_string(straight.join("series.csv")).unwrap();
-    assert!(whole.starts_with(&text), "the rows so far are the straight run's");
+    assert!(
+        whole.starts_with(&text),
+        "the rows so far are the straight run's"
+    );
     // Rows a crashed run wrote after its checkpoint.
-    let mut f = std::fs::OpenOptions::new().append(true).open(&partial).unwrap();
+    let mut f = std::fs::OpenOptions::new()
+        .append(true)
+        .open(&partial)
+        .unwrap();
     std::io::Write::write_all(&mut f, b"1e0,2e0,3e0,5e0,1e0,1e0\n").unwrap();
     drop(f);
     resume(&crashed.join(checkpoint::FILE_NAME));

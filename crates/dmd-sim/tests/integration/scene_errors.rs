@@ -209,7 +209,10 @@ fn check_with_engine_smd_refuses_what_run_with_engine_smd_refuses() {
             .arg(&scene)
             .output()
             .unwrap();
-        let err = String::from_utf8_lossy(&o.stderr).lines().next().map(str::to_owned);
+        let err = String::from_utf8_lossy(&o.stderr)
+            .lines()
+            .next()
+            .map(str::to_owned);
         (o.status.code(), err)
     };
     let (code, err) = dmd(&["check"]);
