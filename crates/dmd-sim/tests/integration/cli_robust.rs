@@ -191,6 +191,27 @@ fn a_new_run_does_not_mix_its_files_with_another_runs() {
 }
 
 #[test]
+fn samples_that_outgrow_their_limit_stop_the_run() {
+    // The samples behind the summary's error bars are held in memory: a run given in events
+    // is stopped when they reach output.max_bytes (96 bytes each), naming the key.
+    let d = dir("samples");
+    let s = scene(&d, "[output]\nsample_interval = 1e-6\nmax_bytes = 1e5\n");
+    let out = d.join("out");
+    let o = dmd(&["run", "--quiet"], &[("", &s), ("--out", &out)]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).starts_with(&format!(
+            "dmd: {}: output.sample_interval: 1042 samples kept for the summary's error bars \
+             take about 100032 bytes, the limit output.max_bytes = 100000",
+            s.display()
+        )),
+        "{}",
+        stderr(&o)
+    );
+    let _ = std::fs::remove_dir_all(d);
+}
+
+#[test]
 fn a_series_that_outgrows_its_limit_stops_the_run() {
     // A run given in events cannot be estimated beforehand: the series is stopped when it
     // reaches output.max_bytes (exit status 1: a failure during the run).
