@@ -266,6 +266,67 @@ fn a_signal_stops_the_run_with_a_checkpoint_that_resumes_bit_for_bit() {
     let _ = std::fs::remove_dir_all(d);
 }
 
+/// A run stopped by a signal, resumed, stopped again at another moment of the resumed run and
+/// resumed to its end gives the files and summary of the run never stopped. The moments vary
+/// from run to run (0.1–0.6 s into each part, from the clock); the result may not.
+#[test]
+fn a_run_stopped_twice_at_varying_moments_resumes_bit_for_bit() {
+    let d = dir("signal-twice-resumed");
+    let s = d.join("scene.toml");
+    std::fs::write(
+        &s,
+        LONG.replace("events = 4e6\n", "events = 2e6\nrebase_events = 1e5\n"),
+    )
+    .unwrap();
+    let moment = || {
+        let ns = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .unwrap()
+            .subsec_nanos();
+        100 + u64::from(ns % 500)
+    };
+    let stopped = d.join("stopped");
+    let ck = stopped.join("checkpoint.dmd");
+    let run_args = [
+        "run".as_ref(),
+        "--quiet".as_ref(),
+        s.as_os_str(),
+        "--out".as_ref(),
+        stopped.as_os_str(),
+    ];
+    let ready = stopped.join("trajectory.xyz.partial");
+    let (o, _) = crate::support::signal_command(&run_args, &ready, moment(), 1);
+    assert_eq!(o.status.code(), Some(130), "{}", stderr(&o));
+    let resume_args = ["resume".as_ref(), "--quiet".as_ref(), ck.as_os_str()];
+    let (o, _) = crate::support::signal_command(&resume_args, &ready, moment(), 1);
+    assert_eq!(
+        o.status.code(),
+        Some(130),
+        "the resumed run: {}",
+        stderr(&o)
+    );
+    assert!(
+        stderr(&o).contains(&format!("dmd resume {}", ck.display())),
+        "{}",
+        stderr(&o)
+    );
+    let o = dmd(&["resume", "--quiet"], &[("", &ck)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let straight = d.join("straight");
+    let o = dmd(&["run", "--quiet"], &[("", &s), ("--out", &straight)]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    crate::support::same_files(
+        &stopped,
+        &straight,
+        &["series.csv", "msd.csv", "trajectory.xyz"],
+    );
+    assert_eq!(
+        crate::support::summary_without_timings(&stopped),
+        crate::support::summary_without_timings(&straight)
+    );
+    let _ = std::fs::remove_dir_all(d);
+}
+
 /// Rigid dumbbells (site molecules) stop on a signal as spheres do: at the next re-basing,
 /// by default within 10⁴ events (about a quarter of a second here), from which the resumed
 /// run is bit for bit the run never stopped.

@@ -181,21 +181,36 @@ pub(crate) fn run_and_signal(
     out: &Path,
     signals: usize,
 ) -> (std::process::Output, std::time::Duration) {
+    let args = [
+        "run".as_ref(),
+        "--quiet".as_ref(),
+        scene.as_os_str(),
+        "--out".as_ref(),
+        out.as_os_str(),
+    ];
+    signal_command(&args, &out.join("trajectory.xyz.partial"), 200, signals)
+}
+
+/// Starts `dmd ARGS`, waits until `ready` exists and `delay_ms` more, and sends SIGTERM
+/// `signals` times, 20 ms apart. Gives the command's output and the time from the first
+/// signal to its end.
+pub(crate) fn signal_command(
+    args: &[&std::ffi::OsStr],
+    ready: &Path,
+    delay_ms: u64,
+    signals: usize,
+) -> (std::process::Output, std::time::Duration) {
     use std::time::{Duration, Instant};
     let child = std::process::Command::new(env!("CARGO_BIN_EXE_dmd"))
-        .args(["run", "--quiet"])
-        .arg(scene)
-        .arg("--out")
-        .arg(out)
+        .args(args)
         .stderr(std::process::Stdio::piped())
         .spawn()
         .unwrap();
-    let partial = out.join("trajectory.xyz.partial");
     let t0 = Instant::now();
-    while !partial.exists() && t0.elapsed().as_secs() < 60 {
+    while !ready.exists() && t0.elapsed().as_secs() < 60 {
         std::thread::sleep(Duration::from_millis(10));
     }
-    std::thread::sleep(Duration::from_millis(200));
+    std::thread::sleep(Duration::from_millis(delay_ms));
     let sent = Instant::now();
     for _ in 0..signals {
         let k = std::process::Command::new("kill")
