@@ -4,10 +4,11 @@
 //!
 //! - **Output sizes** ([`check_outputs`]): the correlation buffers of `msd`/`vacf`/
 //!   `orientation_acf` (known from the keys alone), and with `run.time` the rows of
-//!   `series.csv` and the size of `trajectory.xyz`, are estimated and refused above
+//!   `series.csv`, the samples kept for the summary's error bars and the size of
+//!   `trajectory.xyz`, are estimated and refused above
 //!   `output.max_bytes` ([`DEFAULT_MAX_BYTES`] unless given). A run whose length is given in
 //!   events cannot be estimated beforehand: [`Observers`](crate::analysis::observable::Observers) stops
-//!   it when the series or the trajectory reaches the same limit.
+//!   it when the series, the samples or the trajectory reach the same limit.
 //! - **Temperatures** ([`check_temperatures`]): normal numbers within [`TEMPERATURE_RATIO`] of
 //!   the potential's energy scale (its smallest finite step or well depth), or within
 //!   [`TEMPERATURE_RANGE`] for pure hard cores, which have no energy scale.
