@@ -191,6 +191,24 @@ fn a_new_run_does_not_mix_its_files_with_another_runs() {
 }
 
 #[test]
+fn zero_threads_are_refused() {
+    // Zero would silently mean "all cores".
+    let d = dir("threads");
+    let s = scene(&d, "");
+    let out = d.join("out");
+    let o = dmd(
+        &["run", "--quiet", "--threads", "0"],
+        &[("", &s), ("--out", &out)],
+    );
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--threads"), "{}", stderr(&o));
+    assert!(!out.exists());
+    let o = dmd(&["resume", "--threads", "0"], &[("", &d)]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    let _ = std::fs::remove_dir_all(d);
+}
+
+#[test]
 fn samples_that_outgrow_their_limit_stop_the_run() {
     // The samples behind the summary's error bars are held in memory: a run given in events
     // is stopped when they reach output.max_bytes (96 bytes each), naming the key.
