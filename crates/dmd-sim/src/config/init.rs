@@ -363,6 +363,17 @@ pub fn read_xyz(scene: &Scene, path: &Path) -> Result<Configuration, SceneError>
     let frame = xyz_frame(&text, scene.init.frame.unwrap_or(0), Some(count)).map_err(&err)?;
     let file_box = parse_lattice(frame.comment).map_err(&err)?;
     let lengths = match (box_lengths(scene), file_box) {
+        (Some(l), Some(f)) if ((l - f).abs().max_element() > 1e-6 * l.max_element()) => {
+            // The positions were taken in another box: in this one they would be squeezed or
+            // spread apart without a word.
+            let v = |x: DVec3| format!("{} × {} × {}", short(x.x), short(x.y), short(x.z));
+            return Err(err(format!(
+                "its Lattice box {} is not the scene's box {}: the positions belong to another \
+                 box; leave box.lengths and box.density out to take the file's box",
+                v(f),
+                v(l)
+            )));
+        }
         (Some(l), _) => l,
         (None, Some(l)) => l,
         (None, None) => {
