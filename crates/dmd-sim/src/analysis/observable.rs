@@ -5,9 +5,12 @@
 //! Sampling reads positions `r + v (t − t_i)` without touching the bodies (no invalidation):
 //! asking for observables does not change the trajectory, and nothing here runs unless asked.
 
+use std::path::{Path, PathBuf};
+
 use glam::DVec3;
 
 use crate::analysis::block::{BlockEstimate, Blocks};
+use crate::analysis::output::{CsvStream, OutputError};
 use crate::analysis::pairs::{for_each_pair, wrap};
 use crate::engine::simulation::{Sampler, View};
 
@@ -621,15 +624,108 @@ pub struct SeriesRow {
     pub pressure: f64,
 }
 
+/// The columns of `series.csv`.
+pub const SERIES_HEADER: [&str; 6] = [
+    "t",
+    "kinetic",
+    "potential",
+    "total",
+    "temperature",
+    "pressure",
+];
+
+/// How the rows of `series.csv` are written from internal units: energies and temperatures
+/// divided by their units, the pressure times its factor (`None`: unchanged), as the scene's
+/// unit system converts them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SeriesUnits {
+    /// The energy unit (internal energy per scene unit).
+    pub energy: f64,
+    /// The temperature unit (internal kT per scene unit).
+    pub temperature: f64,
+    /// The factor from internal pressure to the reported unit.
+    pub pressure: Option<f64>,
+}
+
+/// What a checkpoint keeps of a [`Series`]: its rows are in the file, of which it records the
+/// length.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct SeriesState {
+    /// Rows written.
+    pub rows: u64,
+    /// Time, virial and kinetic-energy integral at the previous sample.
+    pub last: Option<(f64, f64, f64)>,
+    /// Bytes of `series.csv` (its temporary file) at the checkpoint.
+    pub bytes: u64,
+}
+
 /// Pressure and energy time series: a row at every sample but the first (at the start of
-/// production), which only opens the first interval of the pressure.
-#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
+/// production), which only opens the first interval of the pressure. The rows go to
+/// `series.csv` as they are made ([`CsvStream`]): memory does not grow with the run.
+#[derive(Debug, Default)]
 pub struct Series {
-    rows: Vec<SeriesRow>,
+    rows: u64,
     last: Option<(f64, f64, f64)>,
+    file: Option<(CsvStream, SeriesUnits)>,
 }
 
 impl Series {
+    /// A series written to `path` (`series.csv`) in `units`.
+    ///
+    /// # Errors
+    /// [`OutputError`] if the file cannot be created.
+    pub fn streamed(path: &Path, units: SeriesUnits) -> Result<Self, OutputError> {
+        Ok(Series {
+            rows: 0,
+            last: None,
+            file: Some((CsvStream::create(path, &SERIES_HEADER)?, units)),
+        })
+    }
+
+    /// The series of a resumed run, continuing `path` where `state` left it (`path: None`:
+    /// rows counted only).
+    ///
+    /// # Errors
+    /// [`OutputError`] if the file is missing or shorter than the checkpoint recorded.
+    pub fn resumed(
+        path: Option<&Path>,
+        units: SeriesUnits,
+        state: &SeriesState,
+    ) -> Result<Self, OutputError> {
+        Ok(Series {
+            rows: state.rows,
+            last: state.last,
+            file: match path {
+                Some(p) => Some((CsvStream::reopen(p, state.bytes)?, units)),
+                None => None,
+            },
+        })
+    }
+
+    /// Flushes the file and gives what a checkpoint keeps.
+    ///
+    /// # Errors
+    /// [`OutputError`] if the file cannot be written.
+    pub fn mark(&mut self) -> Result<SeriesState, OutputError> {
+        let bytes = match &mut self.file {
+            Some((f, _)) => f.mark()?,
+            None => 0,
+        };
+        Ok(SeriesState {
+            rows: self.rows,
+            last: self.last,
+            bytes,
+        })
+    }
+
+    /// Closes `series.csv` under its name and gives its path (`None` without a file).
+    ///
+    /// # Errors
+    /// [`OutputError`] if the file cannot be written.
+    pub fn finish(self) -> Result<Option<PathBuf>, OutputError> {
+        self.file.map(|(f, _)| f.finish()).transpose()
+    }
+
     fn sample(&mut self, view: &View<'_>) {
         let n = view.bodies.len() as f64;
         let l = view.lengths;
@@ -644,19 +740,23 @@ impl Series {
         let dt = view.elapsed - t;
         let kt = 2.0 * (view.kinetic_integral - kint) / dt / view.dof;
         let pressure = (n * kt + (view.virial - w) / (3.0 * dt)) / volume;
-        self.rows.push(SeriesRow {
-            time: view.elapsed,
-            kinetic: view.kinetic,
-            potential: view.potential,
-            total: view.kinetic + view.potential,
-            temperature: 2.0 * view.kinetic / view.dof,
-            pressure,
-        });
+        self.rows += 1;
+        if let Some((f, u)) = &mut self.file {
+            let e = |x: f64| x / u.energy;
+            f.write_row(&[
+                view.elapsed,
+                e(view.kinetic),
+                e(view.potential),
+                e(view.kinetic + view.potential),
+                2.0 * view.kinetic / view.dof / u.temperature,
+                u.pressure.map_or(pressure, |k| pressure * k),
+            ]);
+        }
     }
 
-    /// The rows.
-    pub fn rows(&self) -> &[SeriesRow] {
-        &self.rows
+    /// The rows written.
+    pub fn rows(&self) -> u64 {
+        self.rows
     }
 }
 
@@ -741,9 +841,9 @@ impl Sampler for Observers {
     }
 
     fn over_budget(&self) -> Option<String> {
-        use crate::analysis::output::{SERIES_ROW_BYTES, short};
+        use crate::analysis::output::{SAMPLE_ROW_BYTES, SERIES_ROW_BYTES, short};
         let max = self.max_bytes? as f64;
-        let rows = self.series.as_ref().map_or(0, |s| s.rows.len()) as f64;
+        let rows = self.series.as_ref().map_or(0, |s| s.rows) as f64;
         if rows * SERIES_ROW_BYTES > max {
             return Some(format!(
                 "output.series: series.csv has reached {} rows (about {} bytes), the limit \
@@ -773,6 +873,17 @@ impl Sampler for Observers {
                  output.max_bytes",
                 short(frames),
                 short(frames * self.gsd_frame_bytes),
+                short(max)
+            ));
+        }
+        let samples = self.samples.as_ref().map_or(0, |s| s.rows().len()) as f64;
+        if samples * SAMPLE_ROW_BYTES > max {
+            return Some(format!(
+                "output.sample_interval: {} samples kept for the summary's error bars take \
+                 about {} bytes, the limit output.max_bytes = {}: lengthen \
+                 output.sample_interval, or raise output.max_bytes",
+                short(samples),
+                short(samples * SAMPLE_ROW_BYTES),
                 short(max)
             ));
         }

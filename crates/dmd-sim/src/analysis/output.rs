@@ -16,6 +16,11 @@ use crate::engine::simulation::View;
 /// bytes in memory).
 pub const SERIES_ROW_BYTES: f64 = 150.0;
 
+/// Bytes of one sample of the per-sample series behind the summary's error bars, held in
+/// memory for the whole production (six numbers of 8 bytes, and as much again while the
+/// vector doubles its capacity).
+pub const SAMPLE_ROW_BYTES: f64 = 96.0;
+
 /// Bytes of one lag of the correlation buffers (MSD, VACF, two orientational ACFs, count).
 pub const LAG_BYTES: f64 = 40.0;
 
@@ -98,11 +103,124 @@ pub fn write_csv(path: &Path, header: &[&str], rows: &[Vec<f64>]) -> Result<(), 
     text.push('\n');
     for row in rows {
         // `{:e}`: the shortest digits that read back to the same f64 (`1.25e-1`, `3e0`).
-        let cells: Vec<String> = row.iter().map(|x| format!("{x:e}")).collect();
-        text.push_str(&cells.join(","));
-        text.push('\n');
+        text.push_str(&csv_line(row));
     }
     write_atomically(path, text.as_bytes())
+}
+
+/// The line of a CSV row as [`write_csv`] writes it: `{:e}` (the shortest digits that read
+/// back to the same f64) separated by commas.
+fn csv_line(row: &[f64]) -> String {
+    let cells: Vec<String> = row.iter().map(|x| format!("{x:e}")).collect();
+    let mut line = cells.join(",");
+    line.push('\n');
+    line
+}
+
+/// A CSV table written row by row as a run produces it (a temporary file renamed when
+/// finished), so that its rows are never held in memory; the finished file is byte for byte
+/// what [`write_csv`] writes for the same rows.
+#[derive(Debug)]
+pub struct CsvStream {
+    path: PathBuf,
+    tmp: PathBuf,
+    out: BufWriter<File>,
+    error: Option<String>,
+}
+
+impl CsvStream {
+    /// Opens `path` (as a temporary file) and writes the header line.
+    ///
+    /// # Errors
+    /// [`OutputError`].
+    pub fn create(path: &Path, header: &[&str]) -> Result<Self, OutputError> {
+        let tmp = temporary(path);
+        let f = File::create(&tmp).map_err(|e| io_err(&tmp, e))?;
+        let mut out = BufWriter::new(f);
+        writeln!(out, "{}", header.join(",")).map_err(|e| io_err(&tmp, e))?;
+        Ok(CsvStream {
+            path: path.to_owned(),
+            tmp,
+            out,
+            error: None,
+        })
+    }
+
+    /// Reopens the temporary file of a table interrupted after `len` bytes (a resumed run):
+    /// rows written after that point are cut off and new ones appended.
+    ///
+    /// # Errors
+    /// [`OutputError`] if the temporary file is missing or shorter than `len`.
+    pub fn reopen(path: &Path, len: u64) -> Result<Self, OutputError> {
+        let tmp = temporary(path);
+        let f = std::fs::OpenOptions::new()
+            .write(true)
+            .open(&tmp)
+            .map_err(|e| io_err(&tmp, format!("cannot continue the table: {e}")))?;
+        let have = f.metadata().map_err(|e| io_err(&tmp, e))?.len();
+        if have < len {
+            return Err(io_err(
+                &tmp,
+                format!(
+                    "cannot continue the table: it has {have} bytes, the checkpoint recorded \
+                     {len}"
+                ),
+            ));
+        }
+        f.set_len(len).map_err(|e| io_err(&tmp, e))?;
+        let mut out = BufWriter::new(f);
+        std::io::Seek::seek(&mut out, std::io::SeekFrom::End(0)).map_err(|e| io_err(&tmp, e))?;
+        Ok(CsvStream {
+            path: path.to_owned(),
+            tmp,
+            out,
+            error: None,
+        })
+    }
+
+    /// Appends a row (an error is kept and reported by [`mark`](Self::mark) and
+    /// [`finish`](Self::finish)).
+    pub fn write_row(&mut self, row: &[f64]) {
+        if self.error.is_none()
+            && let Err(e) = self.out.write_all(csv_line(row).as_bytes())
+        {
+            self.error = Some(e.to_string());
+        }
+    }
+
+    /// Flushes and gives the bytes written so far (for a checkpoint).
+    ///
+    /// # Errors
+    /// [`OutputError`].
+    pub fn mark(&mut self) -> Result<u64, OutputError> {
+        if let Some(e) = &self.error {
+            return Err(io_err(&self.tmp, e));
+        }
+        self.out.flush().map_err(|e| io_err(&self.tmp, e))?;
+        Ok(self
+            .out
+            .get_ref()
+            .metadata()
+            .map_err(|e| io_err(&self.tmp, e))?
+            .len())
+    }
+
+    /// Flushes, syncs and renames the table to its name; gives its path.
+    ///
+    /// # Errors
+    /// [`OutputError`].
+    pub fn finish(mut self) -> Result<PathBuf, OutputError> {
+        if let Some(e) = self.error.take() {
+            return Err(io_err(&self.tmp, e));
+        }
+        self.out.flush().map_err(|e| io_err(&self.tmp, e))?;
+        self.out
+            .get_ref()
+            .sync_all()
+            .map_err(|e| io_err(&self.tmp, e))?;
+        std::fs::rename(&self.tmp, &self.path).map_err(|e| io_err(&self.path, e))?;
+        Ok(self.path)
+    }
 }
 
 /// A horizontal line at a curve's mean, with a shaded band of ± its error.
@@ -1211,6 +1329,56 @@ impl GsdTrajectory {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A streamed table is byte for byte the table written at once, also when it is cut at a
+    /// mark and continued (a resumed run): no row lost or doubled.
+    #[test]
+    fn a_streamed_table_is_the_table_written_at_once_and_continues_at_its_mark() {
+        let dir = std::env::temp_dir().join(format!("dmd-csv-stream-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let rows: Vec<Vec<f64>> = (0..50)
+            .map(|k| {
+                let x = k as f64;
+                vec![0.1 * x, 1.0 / (x + 3.0), -x * 1e-300, 2e300 / (x + 1.0)]
+            })
+            .collect();
+        let header = ["a", "b", "c", "d"];
+        let whole = dir.join("whole.csv");
+        write_csv(&whole, &header, &rows).unwrap();
+        let streamed = dir.join("streamed.csv");
+        let mut s = CsvStream::create(&streamed, &header).unwrap();
+        for r in &rows[..20] {
+            s.write_row(r);
+        }
+        let mark = s.mark().unwrap();
+        // Rows the stopped run wrote after its checkpoint, then lost with it.
+        for r in &rows[20..27] {
+            s.write_row(r);
+        }
+        s.mark().unwrap();
+        drop(s);
+        assert!(
+            !streamed.exists(),
+            "only the temporary file exists until finished"
+        );
+        let mut s = CsvStream::reopen(&streamed, mark).unwrap();
+        for r in &rows[20..] {
+            s.write_row(r);
+        }
+        assert_eq!(s.finish().unwrap(), streamed);
+        assert_eq!(
+            std::fs::read(&streamed).unwrap(),
+            std::fs::read(&whole).unwrap()
+        );
+        // A temporary file shorter than the mark is refused.
+        let mut s = CsvStream::create(&streamed, &header).unwrap();
+        s.write_row(&rows[0]);
+        let short_mark = s.mark().unwrap();
+        drop(s);
+        let e = CsvStream::reopen(&streamed, short_mark + 1).unwrap_err();
+        assert!(e.to_string().contains("the checkpoint recorded"), "{e}");
+        let _ = std::fs::remove_dir_all(dir);
+    }
 
     #[test]
     fn csv_numbers_read_back_to_the_same_bits() {

@@ -75,7 +75,7 @@ enum Command {
         checkpoint_every: Option<String>,
         /// Threads for the jobs of a scene with `[chains]` or `[sweep]` (default: all cores).
         /// Results do not depend on it.
-        #[arg(long)]
+        #[arg(long, value_parser = threads_count)]
         threads: Option<usize>,
         /// Replace the files of a previous run in the output folder (only files dmd writes
         /// are removed); without it such a folder is refused.
@@ -100,7 +100,7 @@ enum Command {
         #[arg(long, value_name = "EVENTS|TIME")]
         checkpoint_every: Option<String>,
         /// Threads for the jobs of chains or a sweep (default: all cores).
-        #[arg(long)]
+        #[arg(long, value_parser = threads_count)]
         threads: Option<usize>,
     },
     /// Find the cheapest accuracy setting of a scene within a target error: short probe runs
@@ -149,6 +149,14 @@ enum Command {
 const COLUMNS: usize = 100;
 
 /// `x` to `digits` significant digits: plain between 10⁻³ and 10⁶, else in scientific notation.
+/// `--threads`: a whole number of at least 1 (rayon would read 0 as "all cores").
+fn threads_count(s: &str) -> Result<usize, String> {
+    match s.parse::<usize>() {
+        Ok(n) if n >= 1 => Ok(n),
+        _ => Err("expected a whole number of threads, at least 1".to_owned()),
+    }
+}
+
 fn sig(x: f64, digits: usize) -> String {
     if !x.is_finite() || x == 0.0 {
         return format!("{x}");

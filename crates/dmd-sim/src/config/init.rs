@@ -7,7 +7,7 @@ use rand::{RngExt, SeedableRng};
 use rand_distr::{Distribution, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;
 
-use crate::analysis::output::ASE_VELOCITY_IN_A_PER_PS;
+use crate::analysis::output::{ASE_VELOCITY_IN_A_PER_PS, short};
 use crate::config::scene::{Positions, PotentialSpec, Scene, SceneError, UnitSystem};
 use crate::engine::simulation::MAX_IMAGE;
 
@@ -99,12 +99,68 @@ pub fn lattice(scene: &Scene, smallest_core: f64) -> Result<Configuration, Scene
             _ => "sc",
         };
         let rho = n as f64 / (lengths.x * lengths.y * lengths.z);
+        // The nearest-neighbour distance of each lattice at this density with cubic cells,
+        // every one filled: an fcc cell of side a holds 4 sites a/√2 apart, an sc cell one.
+        let fcc_spacing = (4.0 / rho).cbrt() / std::f64::consts::SQRT_2;
+        let cubic_spacing = match scene.init.positions {
+            Positions::Fcc => fcc_spacing,
+            _ => rho.cbrt().recip(),
+        };
+        let (key, lower) = if scene.box_.lengths.is_some() {
+            ("box.lengths", "enlarge the box")
+        } else {
+            ("box.density", "lower the density")
+        };
+        let (key, advice) = if cubic_spacing >= smallest_core {
+            // The lattice fits at this density: the box's shape, or cells left partly empty
+            // by the count, squeeze it.
+            let key = match (scene.box_.lengths, scene.box_.aspect) {
+                (None, Some(a)) if a.iter().any(|&x| x != a[0]) => "box.aspect",
+                _ => key,
+            };
+            (
+                key,
+                format!(
+                    "the box holds {}×{}×{} cells of {}×{}×{}, not cubic or not all filled \
+                     (with cubic cells, all filled, the sites would be {} apart): give box \
+                     sides in proportion to whole numbers of cubic cells and a count that \
+                     fills them, {lower}, or start from a file",
+                    k[0],
+                    k[1],
+                    k[2],
+                    short(cell.x),
+                    short(cell.y),
+                    short(cell.z),
+                    short(cubic_spacing)
+                ),
+            )
+        } else if scene.init.positions != Positions::Fcc && fcc_spacing >= smallest_core {
+            (
+                key,
+                format!(
+                    "{lower}, use an fcc lattice (its sites would be {} apart at this \
+                     density), or start from a file",
+                    short(fcc_spacing)
+                ),
+            )
+        } else {
+            // fcc is the densest packing of spheres: √2/d³ with its sites a diameter d apart.
+            let densest = std::f64::consts::SQRT_2 / smallest_core.powi(3);
+            (
+                key,
+                format!(
+                    "no lattice holds cores of diameter {smallest_core} at this density (fcc, \
+                     the densest, holds at most ρ = {}): {lower}, or start from a file",
+                    short(densest)
+                ),
+            )
+        };
         return Err(SceneError::invalid(
-            "box.density",
+            key,
             format!(
                 "density {rho:.6} is too high for an {name} lattice of {n} bodies: neighbouring \
                  sites are {spacing:.6} apart, less than the hard-core diameter {smallest_core}; \
-                 lower the density, use an fcc lattice, or start from a file"
+                 {advice}"
             ),
         ));
     }
@@ -307,6 +363,17 @@ pub fn read_xyz(scene: &Scene, path: &Path) -> Result<Configuration, SceneError>
     let frame = xyz_frame(&text, scene.init.frame.unwrap_or(0), Some(count)).map_err(&err)?;
     let file_box = parse_lattice(frame.comment).map_err(&err)?;
     let lengths = match (box_lengths(scene), file_box) {
+        (Some(l), Some(f)) if ((l - f).abs().max_element() > 1e-6 * l.max_element()) => {
+            // The positions were taken in another box: in this one they would be squeezed or
+            // spread apart without a word.
+            let v = |x: DVec3| format!("{} × {} × {}", short(x.x), short(x.y), short(x.z));
+            return Err(err(format!(
+                "its Lattice box {} is not the scene's box {}: the positions belong to another \
+                 box; leave box.lengths and box.density out to take the file's box",
+                v(f),
+                v(l)
+            )));
+        }
         (Some(l), _) => l,
         (None, Some(l)) => l,
         (None, None) => {

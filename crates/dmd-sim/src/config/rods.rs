@@ -21,6 +21,7 @@ use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;
 
+use crate::analysis::output::short;
 use crate::config::init::{Configuration, read_attitudes, read_orientations};
 use crate::config::scene::{
     NearMinimumSpec, Orientations, PlacementSpec, Scene, SceneError, SearchMethodSpec,
@@ -219,9 +220,55 @@ pub fn tops_model_of(
     )
 }
 
+/// The largest component of a start file's angular velocity along its rod's axis, relative to
+/// `|ω|`, that is taken for the round-off of the file's numbers (six significant digits of the
+/// axis and of `ω` leave about 2·10⁻⁶).
+pub const OMEGA_ALONG_AXIS: f64 = 1e-5;
+
+/// A start file's lab angular velocities of rods (`omegas`, one per axis in `axes`), with the
+/// component along each axis, round-off of the file's numbers, dropped: a linear rotor turns
+/// only about its short axes (seed 003 §V), so `ω` must be perpendicular to the axis.
+///
+/// # Errors
+/// [`SceneError::Invalid`] naming `init.velocities` for a body whose `ω` has a component along
+/// its axis above [`OMEGA_ALONG_AXIS`] of `|ω|`.
+pub fn rotor_omegas(
+    scene: &Scene,
+    omegas: &[DVec3],
+    axes: &[DVec3],
+) -> Result<Vec<DVec3>, SceneError> {
+    let file = scene
+        .init
+        .file
+        .as_deref()
+        .map_or(String::new(), |f| format!("{}: ", f.display()));
+    omegas
+        .iter()
+        .zip(axes)
+        .enumerate()
+        .map(|(i, (&w, &a))| {
+            let along = w.dot(a);
+            if along.abs() > OMEGA_ALONG_AXIS * w.length() {
+                let v = |x: DVec3| format!("({}, {}, {})", short(x.x), short(x.y), short(x.z));
+                return Err(SceneError::invalid(
+                    "init.velocities",
+                    format!(
+                        "{file}body {i}: the angular velocity {} (1/time) has a component {} \
+                         along the rod's axis {}: a rod turns only about its short axes, so \
+                         its angular velocity must be perpendicular to its axis",
+                        v(w),
+                        short(along),
+                        v(a)
+                    ),
+                ));
+            }
+            Ok(w - along * a)
+        })
+        .collect()
+}
+
 /// The terraced model of a rods scene: orientations, and equipartitioned angular velocities or
-/// a start file's (`omegas`, lab frame: their component along each rod's axis, round-off of
-/// the file's numbers, is dropped, as a linear rotor has none).
+/// a start file's (`omegas`, lab frame, checked by [`rotor_omegas`]).
 ///
 /// # Errors
 /// [`SceneError::Invalid`] naming `init.orientations` for a bad file, `search` when the model
@@ -252,11 +299,7 @@ pub fn rods_model<P: PairPotential>(
         .map(|&s| species[s as usize].inertia)
         .collect();
     let omegas = match omegas {
-        Some(w) => w
-            .iter()
-            .zip(&axes)
-            .map(|(&w, &a)| w - w.dot(a) * a)
-            .collect(),
+        Some(w) => rotor_omegas(scene, w, &axes)?,
         None => equipartitioned_omegas(&axes, &inertia, scene.init.temperature, scene.seed),
     };
     Terraced::new(

@@ -50,6 +50,19 @@ impl Units {
         }
     }
 
+    /// How `series.csv` converts its internal numbers ([`energy_out`](Self::energy_out),
+    /// [`temperature_out`](Self::temperature_out), [`pressure_out`](Self::pressure_out)).
+    pub fn series(&self) -> crate::analysis::observable::SeriesUnits {
+        crate::analysis::observable::SeriesUnits {
+            energy: self.energy,
+            temperature: self.temperature,
+            pressure: match self.system {
+                UnitSystem::Reduced => None,
+                UnitSystem::Molecular => Some(BAR_PER_UNIT),
+            },
+        }
+    }
+
     /// An internal energy in the scene's unit.
     pub fn energy_out(&self, e: f64) -> f64 {
         e / self.energy

@@ -37,7 +37,7 @@ use std::time::Duration;
 
 use serde::{Deserialize, Serialize};
 
-use crate::analysis::observable::{Correlations, Rdf, Series};
+use crate::analysis::observable::{Correlations, Rdf, SeriesState};
 use crate::analysis::output::{OutputError, write_atomically};
 use crate::driver::hmc::Chain;
 use crate::engine::simulation::SimState;
@@ -214,8 +214,8 @@ pub struct ObserverState {
     pub rdf: Option<Rdf>,
     /// MSD and VACF.
     pub correlations: Option<Correlations>,
-    /// Series.
-    pub series: Option<Series>,
+    /// The series: its rows are in `series.csv`, whose length it records.
+    pub series: Option<SeriesState>,
     /// The trajectory's temporary file length and frames.
     pub trajectory: Option<(u64, u64)>,
     /// The GSD trajectory's frames.

@@ -417,43 +417,14 @@ pub(crate) fn write_observables(
             )?;
         }
     }
-    if let Some(s) = &obs.series {
-        let rows: Vec<crate::analysis::observable::SeriesRow> = s
-            .rows()
-            .iter()
-            .map(|r| crate::analysis::observable::SeriesRow {
-                time: r.time,
-                kinetic: units.energy_out(r.kinetic),
-                potential: units.energy_out(r.potential),
-                total: units.energy_out(r.total),
-                temperature: units.temperature_out(r.temperature),
-                pressure: units.pressure_out(r.pressure),
-            })
-            .collect();
-        table(
-            "series",
-            &strings(&[
-                "t",
-                "kinetic",
-                "potential",
-                "total",
-                "temperature",
-                "pressure",
-            ]),
-            rows.iter()
-                .map(|r| {
-                    vec![
-                        r.time,
-                        r.kinetic,
-                        r.potential,
-                        r.total,
-                        r.temperature,
-                        r.pressure,
-                    ]
-                })
-                .collect(),
-            None,
-        )?;
+    // `series.csv` was written as the run went; the plots read it back.
+    if let Some(path) = obs.series.take().map(|s| s.finish()).transpose()?.flatten() {
+        files.push("series.csv".into());
+        let rows = if plots {
+            read_series(&path)?
+        } else {
+            Vec::new()
+        };
         if plots {
             let x_label = format!("t ({})", au.time);
             if let Some(p) = energy_plot(&rows, info, au) {
@@ -498,6 +469,46 @@ pub(crate) fn write_observables(
     }
     Ok(files)
 }
+
+/// The rows of a finished `series.csv` (numbers in the scene's units), for its plots: at most
+/// [`PLOTTED_ROWS`], every k-th row of a longer series (a plot draws no more).
+fn read_series(path: &Path) -> Result<Vec<crate::analysis::observable::SeriesRow>, OutputError> {
+    use std::io::BufRead;
+    let bad = |e: &dyn std::fmt::Display| OutputError {
+        path: path.to_owned(),
+        message: format!("cannot read back the series for its plots: {e}"),
+    };
+    let lines = || -> Result<_, OutputError> {
+        let f = std::fs::File::open(path).map_err(|e| bad(&e))?;
+        Ok(std::io::BufReader::new(f).lines().skip(1))
+    };
+    let count = lines()?.count();
+    let stride = count.div_ceil(PLOTTED_ROWS).max(1);
+    let mut rows = Vec::with_capacity(count.min(PLOTTED_ROWS));
+    for line in lines()?.step_by(stride) {
+        let line = line.map_err(|e| bad(&e))?;
+        let x: Vec<f64> = line
+            .split(',')
+            .map(str::parse)
+            .collect::<Result<_, _>>()
+            .map_err(|e| bad(&e))?;
+        let [time, kinetic, potential, total, temperature, pressure] = x[..] else {
+            return Err(bad(&format!("a row of {} numbers", x.len())));
+        };
+        rows.push(crate::analysis::observable::SeriesRow {
+            time,
+            kinetic,
+            potential,
+            total,
+            temperature,
+            pressure,
+        });
+    }
+    Ok(rows)
+}
+
+/// The most rows of `series.csv` its plots draw.
+const PLOTTED_ROWS: usize = 100_000;
 
 /// The energy plot of a series (rows in the scene's units): `K/N`, `U/N` and `E/N` with their
 /// production means and errors (`U/N`'s from `info`, the others block averages of the rows),

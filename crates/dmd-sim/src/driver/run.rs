@@ -288,7 +288,7 @@ pub fn check_setup(
     overrides: &[String],
 ) -> Result<(), RunError> {
     if scene.engine == crate::driver::smd_engine::Engine::Smd {
-        return Ok(());
+        return crate::driver::smd_engine::check_setup(scene, base);
     }
     let points = scene.sweep.as_ref().map_or(1, |s| s.values.len());
     for k in 0..points {
@@ -315,6 +315,19 @@ pub fn check_setup(
         }
     }
     Ok(())
+}
+
+/// The fewest events between re-basings by default (the default is `100 N` within this and
+/// [`MAX_REBASE_EVENTS`]). A signal stops a run at its next re-basing, so the interval is also
+/// how long a stop can take: 10⁶ events of spheres or rods take about a second; an event of
+/// rigid-site or semi-flexible molecules costs tens of times more (site searches, RATTLE), so
+/// theirs is 10⁴, and a re-basing still costs about 1 % of the run (every pair predicted once
+/// against `100 N` events).
+fn fewest_rebase_events(plan: &Plan) -> u64 {
+    match plan {
+        Plan::Sites(_) | Plan::Flexible(_) => 10_000,
+        Plan::Spheres(_) | Plan::Terraced(_) => 1_000_000,
+    }
 }
 
 /// What a scene's simulation is built with besides its state ([`build_simulation`]).
@@ -544,10 +557,9 @@ fn set_up<G: Go>(
         None => choose_skin(scene, plan.reach(), hard, &config)?,
     };
     let mut settings = LoopSettings {
-        rebase_events: scene
-            .run
-            .rebase_events
-            .unwrap_or_else(|| (100 * n as u64).clamp(1_000_000, MAX_REBASE_EVENTS)),
+        rebase_events: scene.run.rebase_events.unwrap_or_else(|| {
+            (100 * n as u64).clamp(fewest_rebase_events(&plan), MAX_REBASE_EVENTS)
+        }),
         seed: scene.seed.wrapping_add(0x7e57_0000_0000_0001),
         debug_check_events: (n as u64).max(1000),
         skin,
@@ -1112,7 +1124,21 @@ impl Context<'_> {
             ));
         }
         if o.series {
-            observers.series = Some(Series::default());
+            // Written to series.csv as it grows; a resumed run continues the file where its
+            // checkpoint left it (the rows after it, from the stopped run, are cut off).
+            let path = self.out.map(|dir| dir.join("series.csv"));
+            let units = self.units.series();
+            observers.series = Some(match resume {
+                Some((_, c)) if !fresh_production => Series::resumed(
+                    path.as_deref(),
+                    units,
+                    &c.observers.series.clone().unwrap_or_default(),
+                )?,
+                _ => match &path {
+                    Some(p) => Series::streamed(p, units)?,
+                    None => Series::default(),
+                },
+            });
         }
         if o.sample_interval.is_some() {
             observers.samples = Some(crate::analysis::smooth::Samples::default());
@@ -1206,7 +1232,6 @@ impl Context<'_> {
             })?;
             observers.rdf = c.observers.rdf.clone();
             observers.correlations = c.observers.correlations.clone();
-            observers.series = c.observers.series.clone();
             observers.samples = c.observers.samples.clone();
         }
         let (k0, e0, p0, p_scale) = run.record.start.expect("set when production starts");
@@ -1583,6 +1608,10 @@ impl Driver {
             Some(g) => Some(g.mark()?),
             None => None,
         };
+        let series = match &mut observers.series {
+            Some(s) => Some(s.mark()?),
+            None => None,
+        };
         let chain = &self.chain;
         self.saver.save(self.events, |source, every| {
             Ok(Checkpoint {
@@ -1594,7 +1623,7 @@ impl Driver {
                 observers: ObserverState {
                     rdf: observers.rdf.clone(),
                     correlations: observers.correlations.clone(),
-                    series: observers.series.clone(),
+                    series,
                     trajectory,
                     gsd,
                     samples: observers.samples.clone(),

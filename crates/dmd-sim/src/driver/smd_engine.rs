@@ -43,7 +43,7 @@ use crate::config::init::{
     read_orientations, read_xyz, rod_semi_axes,
 };
 use crate::config::kinds::{Kind, Visit};
-use crate::config::rods::{equipartitioned_omegas, random_axes, tops_start};
+use crate::config::rods::{equipartitioned_omegas, random_axes, rotor_omegas, tops_start};
 pub use crate::config::scene::{Engine, SmdSpec, SmoothingSpec};
 use crate::config::scene::{
     Orientations, Positions, Scene, SceneError, ThermostatKind, UnitSystem, Velocities,
@@ -212,6 +212,32 @@ pub fn run_named(
     reporter: &mut dyn Reporter,
     name: Option<&str>,
 ) -> Result<SmdSummary, RunError> {
+    go(scene, base, out, reporter, name, false)
+}
+
+/// Sets a scene with `engine = "smd"` up exactly as [`run`] does (start state, time step,
+/// neighbour list, initial forces, outputs' sizes) and stops before the first step: everything
+/// `dmd run` refuses before its first step is refused here, with the same error.
+///
+/// # Errors
+/// As [`run`]; never [`RunError::Smd`] from the integration itself.
+pub fn check_setup(scene: &Scene, base: &Path) -> Result<(), RunError> {
+    match go(scene, base, None, &mut Quiet, None, true) {
+        Err(RunError::SetUpOnly) | Ok(_) => Ok(()),
+        Err(e) => Err(e),
+    }
+}
+
+/// [`run_named`]; with `set_up_only`, stops with [`RunError::SetUpOnly`] once the integrator
+/// holds the start state and the outputs are sized, before anything is written.
+fn go(
+    scene: &Scene,
+    base: &Path,
+    out: Option<&Path>,
+    reporter: &mut dyn Reporter,
+    name: Option<&str>,
+    set_up_only: bool,
+) -> Result<SmdSummary, RunError> {
     let units = Units::of(scene.units);
     let ignored = ignored_keys(scene);
     let scene = &scene.internal();
@@ -271,7 +297,7 @@ pub fn run_named(
         None => 0,
     };
     let frame_every = match &o.trajectory {
-        Some(tr) if out.is_some() => {
+        Some(tr) if out.is_some() || set_up_only => {
             steps_of("output.trajectory.interval", tr.interval, &mut notes)?
         }
         _ => 0,
@@ -351,11 +377,7 @@ pub fn run_named(
         };
         let omegas = match file_omegas {
             // A linear rotor spins about no axis but its short ones.
-            Some(w) => w
-                .iter()
-                .zip(&axes)
-                .map(|(&w, &a)| w - w.dot(a) * a)
-                .collect(),
+            Some(w) => rotor_omegas(scene, &w, &axes)?,
             None => equipartitioned_omegas(&axes, &vec![inertia; n], kt, scene.seed),
         };
         let l = omegas.iter().map(|w| *w * inertia).collect();
@@ -384,7 +406,7 @@ pub fn run_named(
     if let Some(images) = file_images {
         system.set_images(&images).map_err(smd_error)?;
     }
-    if let Some(dir) = out {
+    if let Some(dir) = out.filter(|_| !set_up_only) {
         std::fs::create_dir_all(dir).map_err(|e| OutputError {
             path: dir.to_owned(),
             message: e.to_string(),
@@ -405,6 +427,7 @@ pub fn run_named(
         notes,
         reporter,
         name: name.map(str::to_owned),
+        set_up_only,
     };
     pot.visit(SmdGo { job, system })
 }
@@ -441,6 +464,8 @@ struct Job<'a> {
     reporter: &'a mut dyn Reporter,
     /// The scene's name, for the plots' captions.
     name: Option<String>,
+    /// Stop with [`RunError::SetUpOnly`] before the first step (`dmd check`).
+    set_up_only: bool,
 }
 
 /// Progress reports per phase (and equilibration chunks).
@@ -468,6 +493,24 @@ impl Job<'_> {
             )),
             e => smd_error(e),
         })?;
+
+        // The outputs' sizes are refused before any step is taken.
+        let half = 0.5 * self.config.lengths.min_element();
+        let rdf_r_max = scene
+            .output
+            .rdf
+            .as_ref()
+            .map_or(half, |rdf| rdf.r_max.unwrap_or(half.min(5.0)));
+        if rdf_r_max > half {
+            return Err(SceneError::invalid(
+                "output.rdf.r_max",
+                format!("{rdf_r_max} exceeds half the smallest box side ({half})"),
+            )
+            .into());
+        }
+        if self.set_up_only {
+            return Err(RunError::SetUpOnly);
+        }
 
         // Equilibration: velocity rescaling in place of the Andersen thermostat, else NVE.
         let t = &scene.thermostat;
@@ -549,16 +592,7 @@ impl Job<'_> {
         let mut observers = Observers::default();
         let lengths = self.config.lengths;
         if let Some(rdf) = &o.rdf {
-            let half = 0.5 * lengths.min_element();
-            let r_max = rdf.r_max.unwrap_or(half.min(5.0));
-            if r_max > half {
-                return Err(SceneError::invalid(
-                    "output.rdf.r_max",
-                    format!("{r_max} exceeds half the smallest box side ({half})"),
-                )
-                .into());
-            }
-            observers.rdf = Some(Rdf::new(rdf.bins as usize, r_max, rdf.every));
+            observers.rdf = Some(Rdf::new(rdf.bins as usize, rdf_r_max, rdf.every));
         }
         let interval = self.sample_every as f64 * self.settings.dt;
         if o.msd.is_some() || o.vacf.is_some() || o.orientation_acf.is_some() {
@@ -578,7 +612,10 @@ impl Job<'_> {
             ));
         }
         if o.series {
-            observers.series = Some(Series::default());
+            observers.series = Some(match self.out {
+                Some(dir) => Series::streamed(&dir.join("series.csv"), self.units.series())?,
+                None => Series::default(),
+            });
         }
         if let (Some(_), Some(dir)) = (&o.trajectory, self.out) {
             // Drawn as the event-driven engine draws the same scene.

@@ -195,7 +195,41 @@ impl Rotor for LinearRotor {
         let p: [f64; 10] = parts
             .try_into()
             .map_err(|_| format!("a rod's rotation has 10 numbers, not {}", parts.len()))?;
-        LinearRotor::from_parts(p).map_err(|e| e.to_string())
+        let rotor = LinearRotor::from_parts(p).map_err(|e| e.to_string())?;
+        // The saved numbers are those of a rotor made by `LinearRotor::new`: ω ⟂ s, the rate
+        // |ω| and v₀ = ω̂ × s, to round-off; anything else is a state no run reaches (a rod
+        // spinning about its own axis, or an axis that turns at another rate than ω says).
+        let (s, v, w) = (
+            DVec3::from_slice(&p[..3]),
+            DVec3::from_slice(&p[3..6]),
+            rotor.omega(),
+        );
+        let rate = w.length();
+        let tol = 1e-9;
+        if w.dot(s).abs() > tol * rate {
+            return Err(format!(
+                "its angular velocity ({:.3e}, {:.3e}, {:.3e}) has a component {:.3e} along \
+                 the rod's axis: a rod turns only about its short axes, so its angular \
+                 velocity must be perpendicular to its axis",
+                w.x,
+                w.y,
+                w.z,
+                w.dot(s)
+            ));
+        }
+        let v_expected = if rate > 0.0 {
+            (w / rate).cross(s)
+        } else {
+            DVec3::ZERO
+        };
+        if (p[6] - rate).abs() > tol * rate || (v - v_expected).length() > tol {
+            return Err(format!(
+                "its rotation rate {:.3e} and axis velocity do not follow from its angular \
+                 velocity (|ω| = {rate:.3e})",
+                p[6]
+            ));
+        }
+        Ok(rotor)
     }
 }
 

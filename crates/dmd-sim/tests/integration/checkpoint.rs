@@ -762,6 +762,26 @@ fn forged_checkpoints_with_valid_crcs_are_refused_as_states() {
     let mut b = c.clone();
     b.sim.model_extra[0] *= 2.0;
     refused(&d, "rod-axis", &seal(&b), "body 0 cannot be restored");
+    // A rod spinning about its own axis: ω given a component along the axis (parts 7..10 are
+    // ω, 0..3 the axis), which no linear rotor has.
+    let mut b = c.clone();
+    let axis = glam::DVec3::from_slice(&b.sim.model_extra[..3]);
+    for (k, a) in axis.to_array().iter().enumerate() {
+        b.sim.model_extra[7 + k] += 0.5 * a;
+    }
+    refused(
+        &d,
+        "rod-spinning-about-its-axis",
+        &seal(&b),
+        "body 0 cannot be restored: its angular velocity",
+    );
+    refused(
+        &d,
+        "rod-spinning-about-its-axis-why",
+        &seal(&b),
+        "along the rod's axis: a rod turns only about its short axes, so its angular velocity \
+         must be perpendicular to its axis",
+    );
     let _ = std::fs::remove_dir_all(d);
 
     // An HMC chain whose ΔH histogram lost a bin, or whose counts disagree.
@@ -775,4 +795,52 @@ fn forged_checkpoints_with_valid_crcs_are_refused_as_states() {
     b.chain.as_mut().unwrap().stats.accepted += 1;
     refused(&d, "hmc-counts", &seal(&b), "its HMC counts do not agree");
     let _ = std::fs::remove_dir_all(d);
+}
+
+/// `series.csv` is written as the run goes, not held: a run halted at its production
+/// checkpoint has the rows so far on disk (the checkpoint records their count and the file's
+/// length), and a resume after a crash that left rows beyond the checkpoint cuts them off and
+/// continues, giving the straight run's file: no row doubled, none missing.
+#[test]
+fn the_series_is_streamed_and_a_resume_continues_it_without_duplicates_or_gaps() {
+    let straight = dir("series-straight");
+    run(SW, &[], &straight, &options(SW, &[], None, false)).unwrap();
+    let crashed = dir("series-crashed");
+    let e = run(
+        SW,
+        &[],
+        &crashed,
+        &options(SW, &[], Some(Every::Events(12000)), true),
+    )
+    .unwrap_err();
+    assert!(matches!(e, RunError::Halted));
+    let c = checkpoint::read(&crashed.join(checkpoint::FILE_NAME)).unwrap();
+    assert!(matches!(c.stage, checkpoint::Stage::Production(_)));
+    let state = c.observers.series.clone().expect("the series is saved");
+    let partial = crashed.join("series.csv.partial");
+    let text = std::fs::read_to_string(&partial).unwrap();
+    assert_eq!(text.len() as u64, state.bytes);
+    assert_eq!(
+        text.lines().count() as u64,
+        state.rows + 1,
+        "header and rows"
+    );
+    assert!(state.rows > 10, "{state:?}");
+    let whole = std::fs::read_to_string(straight.join("series.csv")).unwrap();
+    assert!(
+        whole.starts_with(&text),
+        "the rows so far are the straight run's"
+    );
+    // Rows a crashed run wrote after its checkpoint.
+    let mut f = std::fs::OpenOptions::new()
+        .append(true)
+        .open(&partial)
+        .unwrap();
+    std::io::Write::write_all(&mut f, b"1e0,2e0,3e0,5e0,1e0,1e0\n").unwrap();
+    drop(f);
+    resume(&crashed.join(checkpoint::FILE_NAME));
+    same_files(&straight, &crashed, &["series.csv"]);
+    assert!(!partial.exists());
+    let _ = std::fs::remove_dir_all(straight);
+    let _ = std::fs::remove_dir_all(crashed);
 }

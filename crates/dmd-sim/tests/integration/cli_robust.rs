@@ -6,6 +6,8 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+use crate::support::{run_and_signal, signal_then_resume_is_bit_for_bit};
+
 const SCENE: &str = r#"version = 1
 [box]
 density = 0.5
@@ -189,6 +191,45 @@ fn a_new_run_does_not_mix_its_files_with_another_runs() {
 }
 
 #[test]
+fn zero_threads_are_refused() {
+    // Zero would silently mean "all cores".
+    let d = dir("threads");
+    let s = scene(&d, "");
+    let out = d.join("out");
+    let o = dmd(
+        &["run", "--quiet", "--threads", "0"],
+        &[("", &s), ("--out", &out)],
+    );
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--threads"), "{}", stderr(&o));
+    assert!(!out.exists());
+    let o = dmd(&["resume", "--threads", "0"], &[("", &d)]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    let _ = std::fs::remove_dir_all(d);
+}
+
+#[test]
+fn samples_that_outgrow_their_limit_stop_the_run() {
+    // The samples behind the summary's error bars are held in memory: a run given in events
+    // is stopped when they reach output.max_bytes (96 bytes each), naming the key.
+    let d = dir("samples");
+    let s = scene(&d, "[output]\nsample_interval = 1e-6\nmax_bytes = 1e5\n");
+    let out = d.join("out");
+    let o = dmd(&["run", "--quiet"], &[("", &s), ("--out", &out)]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).starts_with(&format!(
+            "dmd: {}: output.sample_interval: 1042 samples kept for the summary's error bars \
+             take about 100032 bytes, the limit output.max_bytes = 100000",
+            s.display()
+        )),
+        "{}",
+        stderr(&o)
+    );
+    let _ = std::fs::remove_dir_all(d);
+}
+
+#[test]
 fn a_series_that_outgrows_its_limit_stops_the_run() {
     // A run given in events cannot be estimated beforehand: the series is stopped when it
     // reaches output.max_bytes (exit status 1: a failure during the run).
@@ -233,90 +274,160 @@ msd = { max_lag = 5 }
 trajectory = { interval = 20 }
 "#;
 
-/// Starts `dmd run` on `scene` into `out`, waits until production has started (the trajectory
-/// is being written) and sends SIGTERM `signals` times.
-fn run_and_signal(scene: &Path, out: &Path, signals: usize) -> (Output, std::time::Duration) {
-    let child = Command::new(env!("CARGO_BIN_EXE_dmd"))
-        .args(["run", "--quiet"])
-        .arg(scene)
-        .arg("--out")
-        .arg(out)
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    let partial = out.join("trajectory.xyz.partial");
-    let t0 = std::time::Instant::now();
-    while !partial.exists() && t0.elapsed().as_secs() < 60 {
-        std::thread::sleep(std::time::Duration::from_millis(10));
-    }
-    std::thread::sleep(std::time::Duration::from_millis(200));
-    let sent = std::time::Instant::now();
-    for _ in 0..signals {
-        let k = Command::new("kill")
-            .args(["-TERM", &child.id().to_string()])
-            .status()
-            .unwrap();
-        assert!(k.success());
-        std::thread::sleep(std::time::Duration::from_millis(20));
-    }
-    let o = child.wait_with_output().unwrap();
-    (o, sent.elapsed())
-}
-
 #[test]
 fn a_signal_stops_the_run_with_a_checkpoint_that_resumes_bit_for_bit() {
     let d = dir("signal");
-    let s = d.join("scene.toml");
     // 1.5·10⁶ events: seconds of a run, of which the signal, 0.2 s into production, stops the
     // first part at a re-basing.
     let text = LONG.replace("events = 4e6\n", "events = 1.5e6\nrebase_events = 1e5\n");
-    std::fs::write(&s, &text).unwrap();
+    signal_then_resume_is_bit_for_bit(&d, &text, &["series.csv", "msd.csv", "trajectory.xyz"]);
+    let _ = std::fs::remove_dir_all(d);
+}
+
+/// A run stopped by a signal, resumed, stopped again at another moment of the resumed run and
+/// resumed to its end gives the files and summary of the run never stopped. The moments vary
+/// from run to run (0.1–0.6 s into each part, from the clock); the result may not.
+#[test]
+fn a_run_stopped_twice_at_varying_moments_resumes_bit_for_bit() {
+    let d = dir("signal-twice-resumed");
+    let s = d.join("scene.toml");
+    std::fs::write(
+        &s,
+        LONG.replace("events = 4e6\n", "events = 2e6\nrebase_events = 1e5\n"),
+    )
+    .unwrap();
+    let moment = || {
+        let ns = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .unwrap()
+            .subsec_nanos();
+        100 + u64::from(ns % 500)
+    };
     let stopped = d.join("stopped");
-    let (o, _) = run_and_signal(&s, &stopped, 1);
-    let err = stderr(&o);
-    assert_eq!(o.status.code(), Some(130), "{err}");
     let ck = stopped.join("checkpoint.dmd");
-    assert!(
-        err.starts_with(&format!(
-            "dmd: {}: stopped by a signal after saving {}",
-            s.display(),
-            ck.display()
-        )),
-        "{err}"
+    let run_args = [
+        "run".as_ref(),
+        "--quiet".as_ref(),
+        s.as_os_str(),
+        "--out".as_ref(),
+        stopped.as_os_str(),
+    ];
+    let ready = stopped.join("trajectory.xyz.partial");
+    let (o, _) = crate::support::signal_command(&run_args, &ready, moment(), 1);
+    assert_eq!(o.status.code(), Some(130), "{}", stderr(&o));
+    let resume_args = ["resume".as_ref(), "--quiet".as_ref(), ck.as_os_str()];
+    let (o, _) = crate::support::signal_command(&resume_args, &ready, moment(), 1);
+    assert_eq!(
+        o.status.code(),
+        Some(130),
+        "the resumed run: {}",
+        stderr(&o)
     );
     assert!(
-        err.contains(&format!("dmd resume {}", ck.display())),
-        "{err}"
+        stderr(&o).contains(&format!("dmd resume {}", ck.display())),
+        "{}",
+        stderr(&o)
     );
-    assert!(!stopped.join("summary.json").exists());
     let o = dmd(&["resume", "--quiet"], &[("", &ck)]);
     assert!(o.status.success(), "{}", stderr(&o));
     let straight = d.join("straight");
     let o = dmd(&["run", "--quiet"], &[("", &s), ("--out", &straight)]);
     assert!(o.status.success(), "{}", stderr(&o));
-    for f in ["series.csv", "msd.csv", "trajectory.xyz"] {
-        assert_eq!(
-            std::fs::read(stopped.join(f)).unwrap(),
-            std::fs::read(straight.join(f)).unwrap(),
-            "{f}"
-        );
-    }
-    let summary = |dir: &Path| -> serde_json::Value {
-        let mut v: serde_json::Value =
-            serde_json::from_slice(&std::fs::read(dir.join("summary.json")).unwrap()).unwrap();
-        for k in [
-            "wall_seconds",
-            "cpu_seconds",
-            "events_per_second",
-            "events_per_cpu_second",
-            "pair_events_per_second",
-            "pair_events_per_cpu_second",
-        ] {
-            v.as_object_mut().unwrap().remove(k);
-        }
-        v
-    };
-    assert_eq!(summary(&stopped), summary(&straight));
+    crate::support::same_files(
+        &stopped,
+        &straight,
+        &["series.csv", "msd.csv", "trajectory.xyz"],
+    );
+    assert_eq!(
+        crate::support::summary_without_timings(&stopped),
+        crate::support::summary_without_timings(&straight)
+    );
+    let _ = std::fs::remove_dir_all(d);
+}
+
+/// Rigid dumbbells (site molecules) stop on a signal as spheres do: at the next re-basing,
+/// by default within 10⁴ events (about a quarter of a second here), from which the resumed
+/// run is bit for bit the run never stopped.
+#[test]
+fn a_signal_stops_a_run_of_site_molecules_that_resumes_bit_for_bit() {
+    let d = dir("signal-sites");
+    let text = r#"version = 1
+seed = 10
+[box]
+density = 0.42631
+[[species]]
+name = "dumbbell"
+count = 108
+molecule = { kind = "dumbbell", elongation = 0.6 }
+[[site_pair]]
+sites = ["A", "A"]
+steps = [[1.0, inf]]
+[init]
+positions = "fcc"
+orientations = "random"
+temperature = 1.0
+[run]
+time = 40.0
+[output]
+sample_interval = 0.5
+series = true
+msd = { max_lag = 5 }
+orientation_acf = { max_lag = 3 }
+trajectory = { interval = 2 }
+"#;
+    signal_then_resume_is_bit_for_bit(
+        &d,
+        text,
+        &["series.csv", "msd.csv", "oacf.csv", "trajectory.xyz"],
+    );
+    let _ = std::fs::remove_dir_all(d);
+}
+
+/// Semi-flexible chains (RATTLE between events) stop on a signal at the next re-basing and
+/// resume bit for bit.
+#[test]
+fn a_signal_stops_a_run_of_flexible_molecules_that_resumes_bit_for_bit() {
+    let d = dir("signal-flexible");
+    let text = r#"version = 1
+seed = 21
+[box]
+density = 0.04
+[[species]]
+name = "chain"
+count = 64
+sites = [
+  { kind = "A", mass = 1.0, position = [0.0, 0.0, 0.0] },
+  { kind = "B", mass = 1.0, position = [0.6, 0.0, 0.0] },
+  { kind = "B", mass = 1.0, position = [0.9, 0.52, 0.0] },
+  { kind = "A", mass = 1.0, position = [1.5, 0.52, 0.05] },
+]
+bonds = [[0, 1], [1, 2], [2, 3]]
+[[site_pair]]
+sites = ["A", "A"]
+steps = [[1.0, inf], [1.3, -1.0]]
+[[site_pair]]
+sites = ["A", "B"]
+steps = [[0.8, inf], [1.0, -0.5], [1.25, -0.25]]
+[[site_pair]]
+sites = ["B", "B"]
+steps = [[0.6, inf], [0.9, 0.3]]
+[rattle]
+step = 0.005
+[search]
+max_step = 0.02
+window = 0.1
+[init]
+positions = "sc"
+temperature = 1.5
+[run]
+time = 16.0
+[output]
+sample_interval = 0.5
+series = true
+msd = { max_lag = 4 }
+trajectory = { interval = 1 }
+"#;
+    signal_then_resume_is_bit_for_bit(&d, text, &["series.csv", "msd.csv", "trajectory.xyz"]);
     let _ = std::fs::remove_dir_all(d);
 }
 

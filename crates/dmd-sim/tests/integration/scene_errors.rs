@@ -26,11 +26,13 @@ fn corpus() -> Vec<PathBuf> {
 fn first_error_line(path: &Path, overrides: &[String]) -> Option<String> {
     let message = match Scene::load(path, overrides) {
         Err(e) => e.to_string(),
-        // Issue 8: a scene for the standard-MD engine goes where `dmd run` sends it.
+        // `dmd check`'s set-up, then the run, as for the event-driven engine.
         Ok((scene, base)) if scene.engine == Engine::Smd => {
-            match smd_engine::run(&scene, &base, None) {
+            match smd_engine::check_setup(&scene, &base)
+                .and_then(|()| smd_engine::run(&scene, &base, None).map(|_| ()))
+            {
                 Err(e) => e.to_string(),
-                Ok(_) => return None,
+                Ok(()) => return None,
             }
         }
         // `dmd check`'s set-up (every point of a sweep), then the run.
@@ -106,11 +108,8 @@ fn the_command_refuses_every_bad_scene_with_exit_status_2() {
                 o.status.code()
             ));
         }
-        // `dmd check` refuses it the same way: it sets the scene up as `dmd run` does
-        // (scenes for the smd engine are set up by that engine's run alone).
-        if text.contains("engine = \"smd\"") {
-            continue;
-        }
+        // `dmd check` refuses it the same way: it sets the scene up as `dmd run` does, for
+        // either engine.
         let o = std::process::Command::new(env!("CARGO_BIN_EXE_dmd"))
             .arg("check")
             .arg(path)
@@ -183,4 +182,52 @@ fn an_override_of_a_site_scene_gets_the_same_message_as_a_file() {
         let from_override = first_error_line(&good, &[set.to_owned()]).unwrap();
         assert_eq!(from_file, from_override, "{file} vs --set {set}");
     }
+}
+
+/// `dmd check --engine smd` sets an event-driven scene up as `dmd run --engine smd` would: a
+/// sampling interval shorter than half the smd time step passes the event-driven check (which
+/// has no time step) and is refused for the smd engine, by both commands, exit status 2, with
+/// the same message, and nothing is written by the check.
+#[test]
+fn check_with_engine_smd_refuses_what_run_with_engine_smd_refuses() {
+    let dir = std::env::temp_dir().join(format!("dmd-check-smd-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("lj.toml");
+    std::fs::write(
+        &scene,
+        "version = 1\n[box]\ndensity = 0.5\n[[species]]\nname = \"A\"\ncount = 256\n\
+         [[pair]]\nspecies = [\"A\", \"A\"]\n\
+         potential = { kind = \"lennard-jones\", epsilon = 1.0, sigma = 1.0 }\n\
+         terraces = { step_kt = 0.5 }\n[init]\npositions = \"fcc\"\ntemperature = 2.0\n\
+         [run]\ntime = 0.01\n[output]\nsample_interval = 0.0001\nseries = true\n",
+    )
+    .unwrap();
+    let dmd = |args: &[&str]| {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_dmd"))
+            .args(args)
+            .arg(&scene)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr)
+            .lines()
+            .next()
+            .map(str::to_owned);
+        (o.status.code(), err)
+    };
+    let (code, err) = dmd(&["check"]);
+    assert_eq!(code, Some(0), "the event-driven check: {err:?}");
+    let want = format!(
+        "dmd: {}: scene key `output.sample_interval`: 0.0001 is shorter than half the time \
+         step smd.dt = 0.001",
+        scene.display()
+    );
+    let smd = ["--engine", "smd", "--set", "smd.dt=0.001"];
+    let (code, err) = dmd(&[&["check"][..], &smd].concat());
+    assert_eq!((code, err.as_deref()), (Some(2), Some(want.as_str())));
+    let out = dir.join("out");
+    let out_arg = out.to_string_lossy().into_owned();
+    let (code, err) = dmd(&[&["run", "--quiet", "--out", out_arg.as_str()][..], &smd].concat());
+    assert_eq!((code, err.as_deref()), (Some(2), Some(want.as_str())));
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -171,3 +171,120 @@ pub(crate) fn run_with(text: &str, overrides: &[&str]) -> Summary {
     let scene = Scene::from_str_with(text, &o).unwrap_or_else(|e| panic!("{e}"));
     run_scene(&scene, Path::new("."), None, &mut Quiet).unwrap_or_else(|e| panic!("{e}"))
 }
+
+/// Starts `dmd run --quiet SCENE --out OUT`, waits until production has started (its
+/// trajectory is being written: the scene must ask for `output.trajectory`) and 0.2 s more,
+/// and sends SIGTERM `signals` times, 20 ms apart. Gives the command's output and the time
+/// from the first signal to its end.
+pub(crate) fn run_and_signal(
+    scene: &Path,
+    out: &Path,
+    signals: usize,
+) -> (std::process::Output, std::time::Duration) {
+    let args = [
+        "run".as_ref(),
+        "--quiet".as_ref(),
+        scene.as_os_str(),
+        "--out".as_ref(),
+        out.as_os_str(),
+    ];
+    signal_command(&args, &out.join("trajectory.xyz.partial"), 200, signals)
+}
+
+/// Starts `dmd ARGS`, waits until `ready` exists and `delay_ms` more, and sends SIGTERM
+/// `signals` times, 20 ms apart. Gives the command's output and the time from the first
+/// signal to its end.
+pub(crate) fn signal_command(
+    args: &[&std::ffi::OsStr],
+    ready: &Path,
+    delay_ms: u64,
+    signals: usize,
+) -> (std::process::Output, std::time::Duration) {
+    use std::time::{Duration, Instant};
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_dmd"))
+        .args(args)
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let t0 = Instant::now();
+    while !ready.exists() && t0.elapsed().as_secs() < 60 {
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    std::thread::sleep(Duration::from_millis(delay_ms));
+    let sent = Instant::now();
+    for _ in 0..signals {
+        let k = std::process::Command::new("kill")
+            .args(["-TERM", &child.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(k.success());
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let o = child.wait_with_output().unwrap();
+    (o, sent.elapsed())
+}
+
+/// `summary.json` of `dir` without its timings.
+pub(crate) fn summary_without_timings(dir: &Path) -> serde_json::Value {
+    let mut v: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("summary.json")).unwrap()).unwrap();
+    for k in [
+        "wall_seconds",
+        "cpu_seconds",
+        "events_per_second",
+        "events_per_cpu_second",
+        "pair_events_per_second",
+        "pair_events_per_cpu_second",
+    ] {
+        v.as_object_mut().unwrap().remove(k);
+    }
+    v
+}
+
+/// The scene `text` (which asks for a trajectory) is run in `d` and stopped by SIGTERM in
+/// production: the command says where it saved the checkpoint and how to resume, exits with
+/// status 130 and writes no summary; `dmd resume` of that checkpoint then gives `files` and a
+/// summary identical (timings excepted) to those of the same run never stopped.
+pub(crate) fn signal_then_resume_is_bit_for_bit(d: &Path, text: &str, files: &[&str]) {
+    let s = d.join("scene.toml");
+    std::fs::write(&s, text).unwrap();
+    let stopped = d.join("stopped");
+    let (o, _) = run_and_signal(&s, &stopped, 1);
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert_eq!(o.status.code(), Some(130), "{err}");
+    let ck = stopped.join("checkpoint.dmd");
+    assert!(
+        err.starts_with(&format!(
+            "dmd: {}: stopped by a signal after saving {}",
+            s.display(),
+            ck.display()
+        )),
+        "{err}"
+    );
+    assert!(
+        err.contains(&format!("dmd resume {}", ck.display())),
+        "{err}"
+    );
+    assert!(!stopped.join("summary.json").exists());
+    let dmd = |args: &[&std::ffi::OsStr]| {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_dmd"))
+            .args(args)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    };
+    dmd(&["resume".as_ref(), "--quiet".as_ref(), ck.as_os_str()]);
+    let straight = d.join("straight");
+    dmd(&[
+        "run".as_ref(),
+        "--quiet".as_ref(),
+        s.as_os_str(),
+        "--out".as_ref(),
+        straight.as_os_str(),
+    ]);
+    same_files(&stopped, &straight, files);
+    assert_eq!(
+        summary_without_timings(&stopped),
+        summary_without_timings(&straight)
+    );
+}
