@@ -6,9 +6,12 @@ overrides as ``dmd run --set`` takes them::
     import dmdsim
 
     sim = dmdsim.load("scenes/hard-spheres.toml", set={"species.0.count": 500})
-    sim.advance(events=100_000)
+    sim.advance(events=100_000)   # through the scene's stages: equilibration, production
     sim.positions          # (N, 3) float64, in the box, in the scene's length unit
     sim.state()            # time, events, energies, temperature
+    sim.advance()          # to the end of the run
+    sim.summary()          # dmd run's summary.json, error bars included
+    sim.observables()["rdf"]["g"]   # g(r), MSD, ... as [output] asks, numpy arrays
 
     summary = dmdsim.run("scenes/rods-paper.toml", out="out/rods", set=["run.time=2"])
 
@@ -105,21 +108,37 @@ def _source(scene: SceneLike) -> Tuple[str, str, str]:
     return str(scene), os.getcwd(), ""
 
 
-def load(scene: SceneLike, set: Overrides = None) -> Simulation:
-    """The simulation of ``scene`` in its initial state, as ``dmd run`` starts it.
+def load(
+    scene: SceneLike,
+    set: Overrides = None,
+    out: Union[None, str, "os.PathLike[str]"] = None,
+    force: bool = False,
+) -> Simulation:
+    """The run of ``scene`` before its first event, set up as ``dmd run`` sets it up.
 
     ``scene`` is a path to a TOML file, TOML text or a dict; ``set`` overrides keys like
     ``dmd run --set`` (a list of ``"KEY=VALUE"`` or a dict ``{"KEY": value}``, where the value
-    ``None`` removes the key). Raises
+    ``None`` removes the key). :meth:`Simulation.advance` runs the scene's stages in order
+    (equilibration with its thermostat, HMC segments, production with the observables of
+    ``[output]``); with ``out`` the run's files (``summary.json``, the observables' CSV files,
+    trajectories) are written into that folder as ``dmd run --out`` writes them, when the run
+    ends (``force`` empties a folder holding another run's files). Raises
     :class:`SceneError` with the ``dmd`` command's message for a scene it refuses.
     """
     text, base, file = _source(scene)
-    return Simulation(text, _overrides(set), base, file)
+    out_path = None if out is None else os.fspath(out)
+    return Simulation(text, _overrides(set), base, file, out_path, force)
 
 
-def resume(path: Union[str, "os.PathLike[str]"]) -> Simulation:
-    """The simulation saved by :meth:`Simulation.checkpoint` in ``path``."""
-    return Simulation.resume(os.fspath(path))
+def resume(
+    path: Union[str, "os.PathLike[str]"],
+    out: Union[None, str, "os.PathLike[str]"] = None,
+    force: bool = False,
+) -> Simulation:
+    """The run saved by :meth:`Simulation.checkpoint` in ``path``, continuing at its stage
+    (``out`` and ``force`` as for :func:`load`)."""
+    out_path = None if out is None else os.fspath(out)
+    return Simulation.resume(os.fspath(path), out_path, force)
 
 
 def run(

@@ -18,28 +18,72 @@ class CheckpointError(RunError):
     """A checkpoint that cannot be written, read or resumed."""
 
 class Simulation:
-    """The event loop of one scene (build it with :func:`dmdsim.load`).
+    """The run of one scene (build it with :func:`dmdsim.load`), advanced through its stages.
 
-    It starts in the scene's initial state (lattice or file, Maxwell–Boltzmann velocities and
-    random or given orientations from the scene's seed), exactly as ``dmd run`` starts, and runs
-    the plain microcanonical dynamics: no equilibration phase, thermostat or observables (those
-    belong to :func:`dmdsim.run`). Scenes with ``[hmc]``, ``[chains]``, ``[sweep]`` or
-    ``engine = "smd"`` are refused. Arrays are new float64 (species int64) numpy arrays in the
-    scene's units: lengths in σ or Å, times in the time unit or ps.
+    It starts as ``dmd run`` starts (lattice or file, Maxwell–Boltzmann velocities and random or
+    given orientations from the scene's seed) and runs the stages the scene gives, in order:
+    equilibration (``run.equilibration_events`` or ``run.equilibration_time``, with the
+    ``[thermostat]``), HMC equilibration segments (``hmc.equilibration_segments``), then
+    production (``run.events``, ``run.time`` or ``hmc.segments``) with the thermostat of
+    ``thermostat.during`` and the observables of ``[output]``. Advanced to its end it gives the
+    numbers of ``dmd run`` for the same scene and seed (:meth:`summary`, :meth:`observables`).
+    Scenes with ``[chains]``, ``[sweep]`` or ``engine = "smd"`` are refused (run them with
+    :func:`dmdsim.run` or :func:`dmdsim.run_ensemble`). Arrays are new float64 (species int64)
+    numpy arrays in the scene's units: lengths in σ or Å, times in the time unit or ps.
     """
 
-    def __init__(self, text: str, overrides: List[str], base: str, file: str) -> None: ...
+    def __init__(
+        self,
+        text: str,
+        overrides: List[str],
+        base: str,
+        file: str,
+        out: Optional[str] = None,
+        force: bool = False,
+    ) -> None: ...
     @staticmethod
-    def resume(path: str) -> "Simulation":
-        """The simulation saved in ``path`` by :meth:`checkpoint`; continues it bit for bit."""
+    def resume(path: str, out: Optional[str] = None, force: bool = False) -> "Simulation":
+        """The run saved in ``path`` by :meth:`checkpoint`, at its stage, with its thermostat and
+        observables; it continues bit for bit as the run that saved it."""
     def advance(self, events: Optional[int] = None, time: Optional[float] = None) -> None:
-        """Runs ``events`` more events, or ``time`` more simulated time (exactly one of them).
+        """Runs the scene's stages for ``events`` more events or ``time`` more simulated time,
+        or, with neither, to the end of the run.
+
+        The budget carries over from one stage into the next while their lengths are in the
+        same unit; a stage whose length is in the other unit (``run.time`` against ``events=``)
+        raises ``ValueError`` naming its key, and an HMC stage runs whole segments while the
+        budget lasts. A run stops at its end (an ended run raises :class:`RunError`); with an
+        output folder its files are written then. Advancing in pieces runs the same events as
+        running whole; only the time integrals are summed piece by piece (round-off), and each
+        piece of a stage measured in time adds one scheduler entry (the summary's
+        ``queue_pushed`` and ``queue_stale_dropped``).
 
         The GIL is released while the engine runs; Ctrl-C raises ``KeyboardInterrupt`` within
         16384 events, leaving the state whole (it can be advanced again).
         """
+    def run(self) -> Dict[str, Any]:
+        """Advances to the end of the run and returns its summary (:meth:`summary`)."""
+    def summary(self) -> Optional[Dict[str, Any]]:
+        """The summary of production so far, the keys and units of ``dmd run``'s
+        ``summary.json`` (temperature, pressure, potential energy with their block-average
+        ``_error`` bars, diffusion coefficients, event counts, ...); the whole production's,
+        equal to the command's, once the run has ended. ``None`` before production."""
+    def observables(self) -> Dict[str, Dict[str, npt.NDArray[np.float64]]]:
+        """The observables of production so far that ``[output]`` asks for, as
+        ``{name: {column: array}}`` with the names and columns of ``dmd run``'s CSV files:
+        ``rdf`` (``r``, ``g``, ``g_error``, partials), ``msd`` (``t``, ``msd``, ``msd_error``),
+        ``vacf``, ``oacf`` and ``series``. Empty before production."""
+    @property
+    def stage(self) -> str:
+        """``"equilibration"``, ``"hmc equilibration"``, ``"production"``,
+        ``"hmc production"``, or ``"ended"``."""
+    @property
+    def stage_left(self) -> Optional[Tuple[str, float]]:
+        """What is left of the current stage: ``("events", n)``, ``("time", t)`` or
+        ``("segments", n)``; ``None`` once the run has ended."""
     def checkpoint(self, path: str) -> None:
-        """Writes the state to ``path`` (dmd's checkpoint format) for :meth:`resume`.
+        """Writes the run to ``path`` (dmd's checkpoint format: state, stage, thermostat,
+        observables) for :meth:`resume`.
 
         The time origin is re-based first (the loop's exact state is saved at a re-basing), so
         this run and a resumed one continue identically from here.
@@ -49,10 +93,11 @@ class Simulation:
         """Number of bodies."""
     @property
     def time(self) -> float:
-        """Simulated time since the start."""
+        """Simulated time since the start of the run (equilibration included)."""
     @property
     def events(self) -> int:
-        """Events executed since the start (pair events, cell crossings)."""
+        """Events of the current stage (pair events, cell crossings, thermostat collisions);
+        production counts from its own start, as the summary's ``events``."""
     @property
     def units(self) -> str:
         """``"reduced"`` or ``"molecular"``."""

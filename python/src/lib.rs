@@ -15,12 +15,15 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
-use dmd_sim::checkpoint::{self, Checkpoint, Left, ObserverState, RunRecord, SceneSource, Stage};
+use dmd_sim::checkpoint::{self, Checkpoint, Left, SceneSource, Stage};
 use dmd_sim::model::PairModel;
-use dmd_sim::run::{Built, Reporter, RunError as DmdRunError, RunOptions, UseSimulation};
+use dmd_sim::run::{
+    Built, Halt, ObservableTable, Reporter, RunError as DmdRunError, RunOptions, StagedRun,
+    Summary, UseRun,
+};
 use dmd_sim::scene::Scene;
 use dmd_sim::schedule::Scheduler;
-use dmd_sim::simulation::{Counters, NoSampler, Progress, SimError, Simulation as Loop, Stop};
+use dmd_sim::simulation::{Counters, Progress, SimError, Simulation as Loop, Stop};
 use dmd_sim::smd_engine::Engine as EngineKind;
 use glam::{DQuat, DVec3};
 use numpy::ndarray::{Array1, Array2};
@@ -118,9 +121,9 @@ impl Reporter for Watch {
     }
 }
 
-/// What the Python class needs of a loop, whatever its model and queue.
+/// What the Python class needs of a run, whatever its model and queue.
 trait Engine: Send {
-    fn run(&mut self, stop: Stop, watch: &mut Watch) -> Result<(), SimError>;
+    fn advance(&mut self, budget: Option<Stop>, watch: &mut Watch) -> Result<Halt, DmdRunError>;
     fn n(&self) -> usize;
     fn time(&self) -> f64;
     fn counters(&self) -> Counters;
@@ -133,125 +136,124 @@ trait Engine: Send {
     fn spins(&self) -> Vec<DVec3>;
     fn energies(&self) -> (f64, f64, f64);
     fn built(&self) -> &Built;
+    fn stage_name(&self) -> &'static str;
+    fn stage(&self) -> Option<Stage>;
+    fn summary(&self) -> Option<Summary>;
+    fn tables(&mut self) -> Vec<ObservableTable>;
+    /// The ended run's summary, its files written (with an output folder).
+    fn finish(&mut self) -> Result<Summary, DmdRunError>;
     /// Re-bases the time origin (where a state is exact) and returns the checkpoint of it.
-    fn checkpoint(&mut self, source: SceneSource) -> Checkpoint;
+    fn checkpoint(&mut self, source: SceneSource) -> Result<Checkpoint, DmdRunError>;
 }
 
-struct Held<M, Q> {
-    sim: Loop<M, Q>,
-    built: Built,
+struct Held<M: PairModel, Q: Scheduler> {
+    run: StagedRun<M, Q>,
+}
+
+impl<M: PairModel + Send, Q: Scheduler + Send> Held<M, Q> {
+    fn sim(&self) -> &Loop<M, Q> {
+        self.run.simulation()
+    }
 }
 
 impl<M: PairModel + Send, Q: Scheduler + Send> Engine for Held<M, Q> {
-    fn run(&mut self, stop: Stop, watch: &mut Watch) -> Result<(), SimError> {
-        self.sim.set_cancel(Some(Arc::clone(&watch.flag)));
-        let result = self.sim.run(stop, &mut NoSampler, &mut |_| watch.look());
-        self.sim.set_cancel(None);
-        result
+    fn advance(&mut self, budget: Option<Stop>, watch: &mut Watch) -> Result<Halt, DmdRunError> {
+        self.run.advance(budget, watch)
     }
     fn n(&self) -> usize {
-        self.sim.bodies().len()
+        self.sim().bodies().len()
     }
     fn time(&self) -> f64 {
-        self.sim.time()
+        self.sim().time()
     }
     fn counters(&self) -> Counters {
-        self.sim.counters()
+        self.sim().counters()
     }
     fn lengths(&self) -> DVec3 {
-        self.sim.lengths()
+        self.sim().lengths()
     }
     fn positions(&self) -> Vec<DVec3> {
         // The loop wraps a body when it crosses into a cell across the box face, so a stored
         // position can lie a little outside the box; the array is wrapped into [0, L).
-        let l = self.sim.lengths();
+        let l = self.sim().lengths();
         let wrap = |x: f64, l: f64| {
             let y = x.rem_euclid(l);
             if y < l { y } else { 0.0 }
         };
-        self.sim
+        self.sim()
             .positions()
             .iter()
             .map(|r| DVec3::new(wrap(r.x, l.x), wrap(r.y, l.y), wrap(r.z, l.z)))
             .collect()
     }
     fn unwrapped_positions(&self) -> Vec<DVec3> {
-        let l = self.sim.lengths();
-        self.sim
-            .positions()
+        let sim = self.sim();
+        let l = sim.lengths();
+        sim.positions()
             .iter()
-            .zip(self.sim.images())
+            .zip(sim.images())
             .map(|(r, im)| *r + DVec3::new(im[0] as f64, im[1] as f64, im[2] as f64) * l)
             .collect()
     }
     fn velocities(&self) -> Vec<DVec3> {
-        self.sim.bodies().iter().map(|b| b.v).collect()
+        self.sim().bodies().iter().map(|b| b.v).collect()
     }
     fn species(&self) -> Vec<u32> {
-        self.sim.bodies().iter().map(|b| b.species).collect()
+        self.sim().bodies().iter().map(|b| b.species).collect()
     }
     fn attitudes(&self) -> Vec<Option<DQuat>> {
-        let now = self.sim.now();
+        let sim = self.sim();
+        let now = sim.now();
         (0..self.n() as u32)
-            .map(|i| self.sim.model().attitude(i, now))
+            .map(|i| sim.model().attitude(i, now))
             .collect()
     }
     fn spins(&self) -> Vec<DVec3> {
-        let model = self.sim.model();
-        self.sim
-            .bodies()
+        let sim = self.sim();
+        let model = sim.model();
+        sim.bodies()
             .iter()
             .enumerate()
             .map(|(i, b)| model.spin(i as u32, b.species))
             .collect()
     }
     fn energies(&self) -> (f64, f64, f64) {
-        (
-            self.sim.kinetic_energy(),
-            self.sim.potential_energy(),
-            self.sim.dof(),
-        )
+        let sim = self.sim();
+        (sim.kinetic_energy(), sim.potential_energy(), sim.dof())
     }
     fn built(&self) -> &Built {
-        &self.built
+        self.run.built()
     }
-    fn checkpoint(&mut self, source: SceneSource) -> Checkpoint {
-        if !self.sim.at_origin() {
-            self.sim.rebase();
-        }
-        let (p, _) = self.sim.momentum_and_mass();
-        let k = self.sim.kinetic_energy();
-        Checkpoint {
-            source,
-            every: None,
-            stage: Stage::Production(Left::Events(0)),
-            sim: self.sim.save_state(),
-            record: RunRecord {
-                start: Some((
-                    k,
-                    k + self.sim.potential_energy(),
-                    p.to_array(),
-                    self.sim.momentum_scale(),
-                )),
-                ..RunRecord::default()
-            },
-            observers: ObserverState::default(),
-            chain: None,
-        }
+    fn stage_name(&self) -> &'static str {
+        self.run.stage_name()
+    }
+    fn stage(&self) -> Option<Stage> {
+        self.run.stage()
+    }
+    fn summary(&self) -> Option<Summary> {
+        self.run.summary()
+    }
+    fn tables(&mut self) -> Vec<ObservableTable> {
+        self.run.tables()
+    }
+    fn finish(&mut self) -> Result<Summary, DmdRunError> {
+        self.run.finish()
+    }
+    fn checkpoint(&mut self, source: SceneSource) -> Result<Checkpoint, DmdRunError> {
+        self.run.checkpoint(source)
     }
 }
 
-/// Boxes the loop `build_simulation` hands over.
+/// Boxes the run `build_run` hands over.
 struct Hold;
 
-impl UseSimulation for Hold {
+impl UseRun for Hold {
     type Output = Box<dyn Engine>;
-    fn use_simulation<M: PairModel + Send + 'static, Q: Scheduler + Send + 'static>(
+    fn use_run<M: PairModel + Send + 'static, Q: Scheduler + Send + 'static>(
         self,
-        sim: Loop<M, Q>,
-        built: Built,
+        run: StagedRun<M, Q>,
     ) -> Box<dyn Engine> {
-        Box::new(Held { sim, built })
+        Box::new(Held { run })
     }
 }
 
@@ -263,16 +265,18 @@ fn vectors<'py>(py: Python<'py>, v: &[DVec3]) -> Bound<'py, PyArray2<f64>> {
         .into_pyarray(py)
 }
 
-/// The event loop of one scene, advanced by events or simulated time (see the stubs,
-/// `dmdsim/_dmdsim.pyi`, for the Python documentation).
+/// The run of one scene, advanced through its stages by events or simulated time (see the
+/// stubs, `dmdsim/_dmdsim.pyi`, for the Python documentation).
 #[pyclass(module = "dmdsim._dmdsim")]
 struct Simulation {
     engine: std::sync::Mutex<Box<dyn Engine>>,
     source: SceneSource,
+    /// The run's files were written (it ended).
+    finished: AtomicBool,
 }
 
 impl Simulation {
-    /// The loop, unless another Python thread is running it (waiting for it here, with the
+    /// The run, unless another Python thread is advancing it (waiting for it here, with the
     /// GIL held, would deadlock: the running loop takes the GIL to look for signals).
     fn engine(&self) -> PyResult<std::sync::MutexGuard<'_, Box<dyn Engine>>> {
         match self.engine.try_lock() {
@@ -285,59 +289,86 @@ impl Simulation {
         }
     }
 
-    fn check_plain(scene: &Scene) -> PyResult<()> {
+    fn check_staged(scene: &Scene) -> PyResult<()> {
         let refuse = |what: &str| {
             Err(SceneError::new_err(format!(
-                "a Simulation runs plain dynamics; this scene has {what}: run it whole with \
-                 dmdsim.run"
+                "a Simulation runs one scene of the event-driven engine; this scene has {what}: \
+                 run it whole with {}",
+                if what.starts_with("engine") {
+                    "dmdsim.run"
+                } else {
+                    "dmdsim.run or dmdsim.run_ensemble"
+                }
             )))
         };
         if scene.engine == EngineKind::Smd {
             return refuse("engine = \"smd\"");
-        }
-        if scene.hmc.is_some() {
-            return refuse("[hmc]");
         }
         if scene.chains.is_some() || scene.sweep.is_some() {
             return refuse("an ensemble ([chains] or [sweep])");
         }
         Ok(())
     }
+
+    fn build(
+        py: Python<'_>,
+        scene: &Scene,
+        source: SceneSource,
+        out: Option<PathBuf>,
+        force: bool,
+        resume: Option<(PathBuf, Checkpoint)>,
+    ) -> PyResult<Self> {
+        Simulation::check_staged(scene)?;
+        if let Some(dir) = &out {
+            dmd_sim::outdir::prepare(dir, force).map_err(|e| RunError::new_err(e.to_string()))?;
+        }
+        let engine = py
+            .detach(|| dmd_sim::run::build_run(scene, &source.base, out.as_deref(), resume, Hold))
+            .map_err(to_py)?;
+        Ok(Simulation {
+            engine: std::sync::Mutex::new(engine),
+            source,
+            finished: AtomicBool::new(false),
+        })
+    }
+}
+
+/// A summary as a Python dict (its JSON, as `summary.json` holds it).
+fn summary_dict<'py>(py: Python<'py>, s: &Summary) -> PyResult<Bound<'py, PyAny>> {
+    let json = serde_json::to_string(s)
+        .map_err(|e| RunError::new_err(format!("the summary does not serialise: {e}")))?;
+    py.import("json")?.call_method1("loads", (json,))
 }
 
 #[pymethods]
 impl Simulation {
-    /// The simulation of a scene's TOML text with `--set` overrides (use `dmdsim.load`).
+    /// The run of a scene's TOML text with `--set` overrides (use `dmdsim.load`).
     #[new]
-    #[pyo3(signature = (text, overrides, base, file))]
+    #[pyo3(signature = (text, overrides, base, file, out=None, force=false))]
     fn new(
         py: Python<'_>,
         text: String,
         overrides: Vec<String>,
         base: PathBuf,
         file: PathBuf,
+        out: Option<PathBuf>,
+        force: bool,
     ) -> PyResult<Self> {
         let scene = Scene::from_str_with(&text, &overrides)
             .map_err(|e| SceneError::new_err(e.to_string()))?;
-        Simulation::check_plain(&scene)?;
         let source = SceneSource {
             text,
             overrides,
             base,
             file,
         };
-        let engine = py
-            .detach(|| dmd_sim::run::build_simulation(&scene, &source.base, None, Hold))
-            .map_err(to_py)?;
-        Ok(Simulation {
-            engine: std::sync::Mutex::new(engine),
-            source,
-        })
+        Simulation::build(py, &scene, source, out, force, None)
     }
 
-    /// The simulation saved by `checkpoint` in `path`; continues it bit for bit.
+    /// The run saved by `checkpoint` in `path`; continues it bit for bit.
     #[staticmethod]
-    fn resume(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
+    #[pyo3(signature = (path, out=None, force=false))]
+    fn resume(py: Python<'_>, path: PathBuf, out: Option<PathBuf>, force: bool) -> PyResult<Self> {
         let c = checkpoint::read(&path).map_err(|e| CheckpointError::new_err(e.to_string()))?;
         let scene = Scene::from_str_with(&c.source.text, &c.source.overrides).map_err(|e| {
             CheckpointError::new_err(format!(
@@ -346,52 +377,132 @@ impl Simulation {
                 c.source.file.display()
             ))
         })?;
-        Simulation::check_plain(&scene)?;
         let source = c.source.clone();
-        let engine = py
-            .detach(|| dmd_sim::run::build_simulation(&scene, &source.base, Some((path, c)), Hold))
-            .map_err(to_py)?;
-        Ok(Simulation {
-            engine: std::sync::Mutex::new(engine),
-            source,
-        })
+        Simulation::build(py, &scene, source, out, force, Some((path, c)))
     }
 
-    /// Runs `events` more events or `time` more simulated time (exactly one), GIL released;
-    /// Ctrl-C raises `KeyboardInterrupt` and leaves the state whole.
+    /// Runs the scene's stages for `events` more events or `time` more simulated time (at
+    /// most one; neither: to the end of the run), GIL released; Ctrl-C raises
+    /// `KeyboardInterrupt` and leaves the state whole.
     #[pyo3(signature = (events=None, time=None))]
     fn advance(&self, py: Python<'_>, events: Option<u64>, time: Option<f64>) -> PyResult<()> {
-        let stop = match (events, time) {
-            (Some(n), None) => Stop::Events(n),
-            (None, Some(t)) if t.is_finite() && t >= 0.0 => Stop::Time(t),
+        let budget = match (events, time) {
+            (Some(n), None) => Some(Stop::Events(n)),
+            (None, Some(t)) if t.is_finite() && t >= 0.0 => Some(Stop::Time(t)),
             (None, Some(t)) => {
                 return Err(PyValueError::new_err(format!(
                     "time must be finite and not negative, got {t}"
                 )));
             }
+            (None, None) => None,
             _ => {
                 return Err(PyValueError::new_err(
-                    "give exactly one of events= and time=",
+                    "give at most one of events= and time=",
                 ));
             }
         };
         let mut guard = self.engine()?;
         let engine: &mut Box<dyn Engine> = &mut guard;
+        if engine.stage().is_none() {
+            let done = engine
+                .summary()
+                .map_or((0, 0.0), |s| (s.events, s.sim_time));
+            return Err(RunError::new_err(format!(
+                "the run has ended ({} events, time {} of production); load the scene with a \
+                 longer run.events, run.time or hmc.segments to run further",
+                done.0, done.1
+            )));
+        }
         let mut watch = Watch::new();
-        let result = py.detach(|| engine.run(stop, &mut watch).map_err(DmdRunError::from));
-        watch.finish(result)
+        let result = py.detach(|| {
+            let halt = engine.advance(budget, &mut watch)?;
+            if halt == Halt::Ended && !self.finished.swap(true, Ordering::Relaxed) {
+                engine.finish()?;
+            }
+            Ok(halt)
+        });
+        match watch.finish(result)? {
+            Halt::OtherUnit => {
+                let (key, unit, kw) = match engine.stage() {
+                    Some(Stage::Equilibration(Left::Time(_))) => {
+                        ("run.equilibration_time", "simulated time", "time")
+                    }
+                    Some(Stage::Equilibration(_)) => {
+                        ("run.equilibration_events", "events", "events")
+                    }
+                    Some(Stage::Production(Left::Time(_))) => {
+                        ("run.time", "simulated time", "time")
+                    }
+                    _ => ("run.events", "events", "events"),
+                };
+                Err(PyValueError::new_err(format!(
+                    "the {} stage is measured in {unit} ({key}): advance it with {kw}= or to \
+                     the end of the run with advance()",
+                    engine.stage_name()
+                )))
+            }
+            Halt::Budget | Halt::Ended => Ok(()),
+        }
     }
 
-    /// Re-bases the time origin and writes the state to `path` (dmd's checkpoint format).
+    /// Runs the scene to the end of its run and returns the summary (`dmd run`'s).
+    fn run<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        if self.engine()?.stage().is_some() {
+            self.advance(py, None, None)?;
+        }
+        let summary = self.engine()?.summary();
+        summary_dict(py, &summary.expect("an ended run has a production"))
+    }
+
+    /// The summary of production so far, or None before production.
+    fn summary<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyAny>>> {
+        let summary = self.engine()?.summary();
+        summary.map(|s| summary_dict(py, &s)).transpose()
+    }
+
+    /// The observables of production so far: `{name: {column: array}}`.
+    fn observables<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let tables = self.engine()?.tables();
+        let d = PyDict::new(py);
+        for t in tables {
+            let columns = PyDict::new(py);
+            for (k, name) in t.columns.iter().enumerate() {
+                let col: Vec<f64> = t.rows.iter().map(|r| r[k]).collect();
+                columns.set_item(name, Array1::from_vec(col).into_pyarray(py))?;
+            }
+            d.set_item(t.name, columns)?;
+        }
+        Ok(d)
+    }
+
+    /// The current stage's name, or `"ended"`.
+    #[getter]
+    fn stage(&self) -> PyResult<&'static str> {
+        Ok(self.engine()?.stage_name())
+    }
+
+    /// What is left of the current stage: `("events", n)`, `("time", t)`, `("segments", n)`,
+    /// or None once the run has ended.
+    #[getter]
+    fn stage_left(&self) -> PyResult<Option<(&'static str, f64)>> {
+        Ok(self.engine()?.stage().map(|s| match s {
+            Stage::Equilibration(l) | Stage::Production(l) => match l {
+                Left::Events(n) => ("events", n as f64),
+                Left::Time(t) => ("time", t),
+                Left::Segments(n) => ("segments", n as f64),
+            },
+        }))
+    }
+
+    /// Re-bases the time origin and writes the run's state to `path` (dmd's checkpoint format).
     fn checkpoint(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
         let mut guard = self.engine()?;
         let engine: &mut Box<dyn Engine> = &mut guard;
         let source = self.source.clone();
         py.detach(|| {
-            let c = engine.checkpoint(source);
-            checkpoint::write(&path, &c)
+            let c = engine.checkpoint(source).map_err(to_py)?;
+            checkpoint::write(&path, &c).map_err(|e| CheckpointError::new_err(e.to_string()))
         })
-        .map_err(|e| CheckpointError::new_err(e.to_string()))
     }
 
     /// Number of bodies.

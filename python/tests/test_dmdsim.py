@@ -17,8 +17,12 @@ ROOT = Path(__file__).resolve().parents[2]
 SCENES = ROOT / "scenes"
 
 
-def hard_spheres(count=256, events=20_000):
-    """Hard spheres at ρσ³ = 0.5 on an fcc lattice (4 n³ bodies)."""
+def hard_spheres(count=256, events=20_000, time=None):
+    """Hard spheres at ρσ³ = 0.5 on an fcc lattice (4 n³ bodies), NVE production of `events`
+    events (or of simulated `time`)."""
+    run = {"equilibration_events": 0, "events": events}
+    if time is not None:
+        run = {"equilibration_events": 0, "time": time}
     return {
         "version": 1,
         "seed": 7,
@@ -26,7 +30,7 @@ def hard_spheres(count=256, events=20_000):
         "species": [{"name": "A", "count": count}],
         "pair": [{"species": ["A", "A"], "steps": [[1.0, float("inf")]]}],
         "init": {"positions": "fcc", "temperature": 1.0},
-        "run": {"equilibration_events": 0, "events": events},
+        "run": run,
     }
 
 
@@ -81,15 +85,21 @@ def test_advance_by_events_conserves_energy_and_stays_in_the_box():
 
 
 def test_advance_by_time_ends_at_that_time():
-    sim = dmdsim.load(hard_spheres())
+    sim = dmdsim.load(hard_spheres(time=10.0))
     sim.advance(time=0.25)
     assert sim.time == pytest.approx(0.25, abs=1e-12)
     sim.advance(time=0.25)
     assert sim.time == pytest.approx(0.5, abs=1e-12)
+    assert sim.stage == "production"
+    assert sim.stage_left[0] == "time"
+    assert sim.stage_left[1] == pytest.approx(9.5, abs=1e-12)
     with pytest.raises(ValueError):
         sim.advance(events=10, time=1.0)
     with pytest.raises(ValueError):
         sim.advance(time=-1.0)
+    # Production is measured in time (run.time): an events budget is refused, naming the key.
+    with pytest.raises(ValueError, match="run.time"):
+        sim.advance(events=10)
 
 
 def test_a_resumed_checkpoint_continues_bit_for_bit(tmp_path):
@@ -235,7 +245,9 @@ def test_rods_have_unit_quaternions_and_the_kinetic_energy_of_their_motion():
     sim = dmdsim.load(SCENES / "rods-paper.toml")
     assert sim.model == "terraced-rods"
     assert sim.units == "molecular"
-    sim.advance(events=3_000)
+    assert sim.stage == "equilibration"
+    sim.advance(time=0.05)  # ps, within equilibration (thermostatted)
+    assert sim.stage == "equilibration"
     q = sim.quaternions
     assert q.shape == (512, 4)
     np.testing.assert_allclose(np.linalg.norm(q, axis=1), 1.0, atol=1e-12)
@@ -269,6 +281,7 @@ def test_rods_load_from_the_last_frame_of_their_gsd_trajectory(tmp_path):
         "init.frame": -1,
         "init.orientations": "file",
         "init.velocities": "file",
+        "output": None,
     }
     sim = dmdsim.load(SCENES / "rods-paper.toml", set=start)
     with hoomd.open(str(path), "r") as t:
@@ -285,7 +298,7 @@ def test_rods_load_from_the_last_frame_of_their_gsd_trajectory(tmp_path):
 
 
 def test_ctrl_c_stops_the_engine_and_leaves_it_usable():
-    sim = dmdsim.load(hard_spheres(count=500))
+    sim = dmdsim.load(hard_spheres(count=500, events=10**12))
     timer = threading.Timer(0.5, lambda: os.kill(os.getpid(), signal.SIGINT))
     started = time.monotonic()
     timer.start()
@@ -312,3 +325,154 @@ def test_dicts_that_have_no_toml_form_raise_scene_error():
 def test_the_example_script_parses():
     source = (ROOT / "python" / "examples" / "rods_gr.py").read_text()
     compile(source, "rods_gr.py", "exec")
+
+
+def cli_summary(dmd, scene, overrides, out):
+    """`dmd run SCENE --set ...`'s summary.json and observables, written into `out`."""
+    args = [str(dmd), "run", str(scene), "--quiet", "--out", str(out)]
+    for o in overrides:
+        args += ["--set", o]
+    subprocess.run(args, check=True, capture_output=True)
+    return json.loads((out / "summary.json").read_text()), dmdsim.read_observables(out)
+
+
+def assert_same_run(py_summary, py_tables, cli, cli_tables):
+    """Every value of the summary (timings and the files written apart) and every number of
+    every observable the same, to the last digit."""
+    assert py_summary.keys() == cli.keys()
+    for key in py_summary.keys() - TIMINGS - {"files"}:
+        assert py_summary[key] == cli[key], key
+    assert py_tables.keys() == cli_tables.keys()
+    for name, columns in cli_tables.items():
+        assert py_tables[name].keys() == columns.keys(), name
+        for column, values in columns.items():
+            np.testing.assert_array_equal(py_tables[name][column], values, err_msg=name)
+
+
+ROD_RUN = [
+    "species.0.count=216",
+    "run.equilibration_time=0.1",
+    "run.time=0.1",
+    "output.sample_interval=0.002",
+    "output.rdf.r_max=8.0",
+    "output.msd.max_lag=0.02",
+    "output.vacf.max_lag=0.02",
+    "output.orientation_acf.max_lag=0.02",
+]
+
+
+def test_a_thermostatted_rods_run_gives_the_commands_numbers(tmp_path):
+    dmd = dmd_command()
+    if dmd is None:
+        pytest.skip("the dmd command is not built")
+    scene = SCENES / "rods-paper.toml"
+    sim = dmdsim.load(scene, set=ROD_RUN, out=tmp_path / "py")
+    assert sim.summary() is None  # no production yet
+    # The Andersen thermostat acts in equilibration (thermostat collisions are events).
+    sim.advance(time=0.05)
+    assert sim.stage == "equilibration"
+    assert sim.state()["events_by_kind"]["thermostat"] > 0
+    sim.advance(time=0.05)
+    assert sim.stage == "production"
+    # Production counts its events from its own start, as the summary does.
+    assert sim.summary()["equilibration_events"] > 0 and sim.events == 0
+    summary = sim.run()
+    assert sim.stage == "ended"
+    cli, cli_tables = cli_summary(dmd, scene, ROD_RUN, tmp_path / "cli")
+    # Run whole, every number is the command's.
+    whole = dmdsim.load(scene, set=ROD_RUN)
+    assert_same_run(whole.run(), whole.observables(), cli, cli_tables)
+    # Run in pieces of time, too: each piece's end is one more entry in the scheduler (its
+    # bookkeeping counters differ), the dynamics are the same.
+    tables = sim.observables()
+    assert {"rdf", "msd", "vacf", "oacf", "series"} <= tables.keys()
+    bookkeeping = {"queue_pushed", "queue_stale_dropped"}
+    assert_same_run(
+        {k: v for k, v in summary.items() if k not in bookkeeping},
+        tables,
+        {k: v for k, v in cli.items() if k not in bookkeeping},
+        cli_tables,
+    )
+    # The Python run's folder holds the command's files, the same summary among them.
+    on_disk = json.loads((tmp_path / "py" / "summary.json").read_text())
+    assert on_disk == summary
+    assert summary["files"] == cli["files"]
+    assert summary["temperature_error"] is not None
+    with pytest.raises(dmdsim.RunError, match="ended"):
+        sim.advance(time=0.01)
+
+
+HS_RUN = [
+    "species.0.count=500",
+    "run.equilibration_events=20000",
+    "run.events=60000",
+    "output.sample_interval=0.05",
+    "output.rdf={bins = 100, r_max = 2.5}",
+    "output.msd={max_lag = 0.5}",
+    "thermostat.kind=\"andersen\"",
+    "thermostat.rate=1.0",
+    "thermostat.during=\"always\"",
+]
+
+
+def test_a_hard_sphere_run_in_pieces_gives_the_commands_numbers(tmp_path):
+    dmd = dmd_command()
+    if dmd is None:
+        pytest.skip("the dmd command is not built")
+    scene = SCENES / "hard-spheres.toml"
+    cli, cli_tables = cli_summary(dmd, scene, HS_RUN, tmp_path / "cli")
+    whole = dmdsim.load(scene, set=HS_RUN)
+    assert_same_run(whole.run(), whole.observables(), cli, cli_tables)
+    # In pieces of events that cross from equilibration into production: the same events;
+    # the time integrals are summed piece by piece, so the averages agree to round-off.
+    pieces = dmdsim.load(scene, set=HS_RUN)
+    for _ in range(5):
+        pieces.advance(events=13_000)
+        assert pieces.state()["events_by_kind"]["thermostat"] > 0  # NVT throughout
+    assert pieces.stage == "production"
+    assert pieces.stage_left == ("events", 20_000 + 60_000 - 5 * 13_000.0)
+    pieces.advance()
+    summary = pieces.summary()
+    for key in ["events", "equilibration_events", "sim_time", "energy_total_end", "seed"]:
+        assert summary[key] == cli[key], key
+    for key in ["temperature", "pressure", "potential_energy_per_body", "pressure_error"]:
+        assert summary[key] == pytest.approx(cli[key], rel=1e-12), key
+    np.testing.assert_array_equal(pieces.observables()["rdf"]["g"], cli_tables["rdf"]["g"])
+
+
+def test_a_checkpoint_in_equilibration_resumes_into_the_same_production(tmp_path):
+    scene = SCENES / "hard-spheres.toml"
+    a = dmdsim.load(scene, set=HS_RUN)
+    a.advance(events=12_000)
+    a.checkpoint(tmp_path / "eq.dmd")
+    b = dmdsim.resume(tmp_path / "eq.dmd", out=tmp_path / "b")
+    assert b.stage == "equilibration" and b.stage_left == ("events", 8_000.0)
+    # The thermostat, the stages and the observers carry on as in the run that saved it.
+    ours, resumed = a.run(), b.run()
+    for key in ours.keys() - TIMINGS - {"files"}:
+        assert resumed[key] == ours[key], key
+    np.testing.assert_array_equal(a.observables()["msd"]["msd"], b.observables()["msd"]["msd"])
+    assert json.loads((tmp_path / "b" / "summary.json").read_text()) == resumed
+
+
+def test_hmc_stages_run_as_the_scene_says():
+    scene = SCENES / "square-well-hmc.toml"
+    short = {
+        "chains": None,
+        "sweep": None,
+        "species.0.count": 108,
+        "run.equilibration_events": 2_000,
+        "hmc.equilibration_segments": 3,
+        "hmc.segments": 5,
+        "hmc.segment_time": 0.2,
+    }
+    sim = dmdsim.load(scene, set=short)
+    assert sim.stage == "equilibration"
+    sim.advance(events=2_000)
+    assert sim.stage == "hmc equilibration" and sim.stage_left == ("segments", 3.0)
+    sim.advance()
+    assert sim.stage == "ended"
+    summary = sim.summary()
+    assert summary["hmc"]["segments"] == 5
+    assert summary["equilibration_events"] == 2_000
+    assert "hmc" not in sim.observables()

@@ -667,6 +667,8 @@ pub struct Series {
     rows: u64,
     last: Option<(f64, f64, f64)>,
     file: Option<(CsvStream, SeriesUnits)>,
+    /// A run without an output folder (the Python API's): the rows, held for its tables.
+    held: Option<(Vec<Vec<f64>>, SeriesUnits)>,
 }
 
 impl Series {
@@ -679,7 +681,47 @@ impl Series {
             rows: 0,
             last: None,
             file: Some((CsvStream::create(path, &SERIES_HEADER)?, units)),
+            held: None,
         })
+    }
+
+    /// A series of a run without an output folder, its rows held in memory (bounded by
+    /// `output.max_bytes` as a file would be) so that [`table`](Self::table) can give them.
+    pub fn held(units: SeriesUnits) -> Self {
+        Series {
+            held: Some((Vec::new(), units)),
+            ..Series::default()
+        }
+    }
+
+    /// Every row so far, as `series.csv` holds them (held, or flushed and read back from the
+    /// file; empty for a resumed run without a folder, whose earlier rows are not kept).
+    ///
+    /// # Errors
+    /// [`OutputError`] if the file cannot be flushed or read.
+    pub fn table(&mut self) -> Result<Vec<Vec<f64>>, OutputError> {
+        if let Some((rows, _)) = &self.held {
+            return Ok(rows.clone());
+        }
+        let Some((f, _)) = &mut self.file else {
+            return Ok(Vec::new());
+        };
+        f.mark()?;
+        let path = f.temporary_path().to_owned();
+        let bad = |e: &dyn std::fmt::Display| OutputError {
+            path: path.clone(),
+            message: format!("cannot read back the series: {e}"),
+        };
+        let text = std::fs::read_to_string(&path).map_err(|e| bad(&e))?;
+        text.lines()
+            .skip(1)
+            .map(|l| {
+                l.split(',')
+                    .map(str::parse)
+                    .collect::<Result<Vec<f64>, _>>()
+                    .map_err(|e| bad(&e))
+            })
+            .collect()
     }
 
     /// The series of a resumed run, continuing `path` where `state` left it (`path: None`:
@@ -699,6 +741,7 @@ impl Series {
                 Some(p) => Some((CsvStream::reopen(p, state.bytes)?, units)),
                 None => None,
             },
+            held: None,
         })
     }
 
@@ -741,16 +784,22 @@ impl Series {
         let kt = 2.0 * (view.kinetic_integral - kint) / dt / view.dof;
         let pressure = (n * kt + (view.virial - w) / (3.0 * dt)) / volume;
         self.rows += 1;
-        if let Some((f, u)) = &mut self.file {
+        let row = |u: &SeriesUnits| {
             let e = |x: f64| x / u.energy;
-            f.write_row(&[
+            [
                 view.elapsed,
                 e(view.kinetic),
                 e(view.potential),
                 e(view.kinetic + view.potential),
                 2.0 * view.kinetic / view.dof / u.temperature,
                 u.pressure.map_or(pressure, |k| pressure * k),
-            ]);
+            ]
+        };
+        if let Some((f, u)) = &mut self.file {
+            f.write_row(&row(u));
+        }
+        if let Some((rows, u)) = &mut self.held {
+            rows.push(row(u).to_vec());
         }
     }
 

@@ -129,6 +129,11 @@ pub struct CsvStream {
 }
 
 impl CsvStream {
+    /// The temporary file the rows go to until [`finish`](Self::finish).
+    pub fn temporary_path(&self) -> &Path {
+        &self.tmp
+    }
+
     /// Opens `path` (as a temporary file) and writes the header line.
     ///
     /// # Errors

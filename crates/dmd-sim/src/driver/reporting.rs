@@ -233,6 +233,18 @@ fn block_mean(x: &[f64]) -> Option<(f64, Option<f64>)> {
     Some((b.mean, b.error.is_finite().then_some(b.error)))
 }
 
+/// One observable's table, as its CSV file holds it: `rdf`, `msd`, `vacf`, `oacf` or `series`,
+/// its column names and its rows (in the scene's units).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ObservableTable {
+    /// The file's stem (`rdf` for `rdf.csv`).
+    pub name: String,
+    /// The column names (the CSV header).
+    pub columns: Vec<String>,
+    /// The rows, one number per column.
+    pub rows: Vec<Vec<f64>>,
+}
+
 /// Writes the observables' CSV files and, with `plots`, their SVG plots (axes in the units of
 /// `units`, captions and means from `info`); returns the names of the files written.
 pub(crate) fn write_observables(
@@ -241,6 +253,31 @@ pub(crate) fn write_observables(
     plots: bool,
     units: &Units,
     info: &PlotInfo,
+) -> Result<Vec<String>, OutputError> {
+    observables(Some(dir), obs, plots, units, info, &mut Vec::new())
+}
+
+/// The observables' tables, the numbers [`write_observables`] writes, without writing anything.
+pub(crate) fn observable_tables(
+    obs: &mut Observers,
+    units: &Units,
+    info: &PlotInfo,
+) -> Vec<ObservableTable> {
+    let mut tables = Vec::new();
+    observables(None, obs, false, units, info, &mut tables)
+        .expect("nothing is written without a folder");
+    tables
+}
+
+/// [`write_observables`] into `dir` (with `None`: no file, no plot, the trajectories left
+/// open), handing every table to `tables` too.
+fn observables(
+    dir: Option<&Path>,
+    obs: &mut Observers,
+    plots: bool,
+    units: &Units,
+    info: &PlotInfo,
+    tables: &mut Vec<ObservableTable>,
 ) -> Result<Vec<String>, OutputError> {
     let mut files = Vec::new();
     let au = units.names();
@@ -257,6 +294,14 @@ pub(crate) fn write_observables(
                      rows: Vec<Vec<f64>>,
                      plot: Option<Plot>|
      -> Result<(), OutputError> {
+        let Some(dir) = dir else {
+            tables.push(ObservableTable {
+                name: name.to_owned(),
+                columns: header.to_vec(),
+                rows,
+            });
+            return Ok(());
+        };
         let csv = format!("{name}.csv");
         let header: Vec<&str> = header.iter().map(String::as_str).collect();
         write_csv(&dir.join(&csv), &header, &rows)?;
@@ -417,6 +462,18 @@ pub(crate) fn write_observables(
             )?;
         }
     }
+    // Without a folder nothing is written: the series' rows (held, or read back from its
+    // stream) are handed over as a table, and the trajectories are left open.
+    let Some(dir) = dir else {
+        if let Some(s) = obs.series.as_mut() {
+            tables.push(ObservableTable {
+                name: "series".to_owned(),
+                columns: strings(&crate::analysis::observable::SERIES_HEADER),
+                rows: s.table()?,
+            });
+        }
+        return Ok(files);
+    };
     // `series.csv` was written as the run went; the plots read it back.
     if let Some(path) = obs.series.take().map(|s| s.finish()).transpose()?.flatten() {
         files.push("series.csv".into());

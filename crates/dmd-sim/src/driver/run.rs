@@ -37,9 +37,9 @@ use crate::driver::checkpoint::{
 };
 use crate::driver::hmc::{Acceptance, Chain, Ensemble, HmcSettings, HmcSummary};
 pub use crate::driver::reporting::{
-    PhaseEnd, Quiet, Reporter, RunError, RunPlan, thread_cpu_seconds,
+    ObservableTable, PhaseEnd, Quiet, Reporter, RunError, RunPlan, thread_cpu_seconds,
 };
-use crate::driver::reporting::{PlotInfo, terrace_step, write_observables};
+use crate::driver::reporting::{PlotInfo, observable_tables, terrace_step, write_observables};
 use crate::engine::model::{HardSpheres, PairModel, Stepped};
 use crate::engine::schedule::Scheduler;
 use crate::engine::simulation::MAX_REBASE_EVENTS;
@@ -330,7 +330,7 @@ fn fewest_rebase_events(plan: &Plan) -> u64 {
     }
 }
 
-/// What a scene's simulation is built with besides its state ([`build_simulation`]).
+/// What a scene's run is built with besides its state ([`build_run`]).
 #[derive(Clone, Debug)]
 pub struct Built {
     /// The scene's unit system (the simulation computes in internal units: lengths, masses
@@ -345,29 +345,30 @@ pub struct Built {
     pub moments: Vec<[f64; 3]>,
 }
 
-/// Something done with the simulation of a scene, whatever its model and scheduler
-/// ([`build_simulation`]).
-pub trait UseSimulation {
+/// Something done with the run of a scene, whatever its model and scheduler ([`build_run`]).
+pub trait UseRun {
     /// What it gives.
     type Output;
-    /// Takes the simulation.
-    fn use_simulation<M: PairModel + Send + 'static, Q: Scheduler + Send + 'static>(
+    /// Takes the run.
+    fn use_run<M: PairModel + Send + 'static, Q: Scheduler + Send + 'static>(
         self,
-        sim: Simulation<M, Q>,
-        built: Built,
+        run: StagedRun<M, Q>,
     ) -> Self::Output;
 }
 
-/// Builds the simulation of `scene` as [`run_scene`] starts it (the same configuration,
-/// velocities, model, queue and loop settings; no phase run, no thermostat, no observers), or
-/// from a checkpoint (`resume`: its file and contents; the scene must be the checkpoint's),
-/// and hands it to `user`. For code that drives the loop itself (the Python package).
+/// Sets up the run of `scene` as [`run_scene`] does (the same configuration, velocities,
+/// model, queue, loop settings and thermostat), or continues the one saved in a checkpoint
+/// (`resume`: its file and contents; the scene must be the checkpoint's), and hands it to
+/// `user` before its first event. For code that advances a run in pieces (the Python
+/// package). With `out`, the run's files are written there by [`StagedRun::finish`] (the
+/// trajectories as it goes).
 ///
 /// # Errors
 /// [`RunError`] as [`run_scene`] for a scene or checkpoint it refuses.
-pub fn build_simulation<U: UseSimulation>(
+pub fn build_run<U: UseRun>(
     scene: &Scene,
     base: &Path,
+    out: Option<&Path>,
     resume: Option<(std::path::PathBuf, Checkpoint)>,
     user: U,
 ) -> Result<U::Output, RunError> {
@@ -375,7 +376,7 @@ pub fn build_simulation<U: UseSimulation>(
         resume,
         ..RunOptions::default()
     };
-    set_up(scene, base, None, &options, false, Building(user))
+    set_up(scene, base, out, &options, false, Building(user))
 }
 
 /// What [`set_up`] does with the model and queue it picked.
@@ -404,24 +405,18 @@ impl Go for Running<'_> {
     }
 }
 
-/// Hands the simulation over ([`build_simulation`]).
+/// Hands the run over ([`build_run`]).
 struct Building<U>(U);
 
-impl<U: UseSimulation> Go for Building<U> {
+impl<U: UseRun> Go for Building<U> {
     type Out = U::Output;
     fn go<M: PairModel + Send + 'static, Q: Scheduler + Send + 'static>(
         self,
         ctx: &Context<'_>,
         model: M,
     ) -> Result<U::Output, RunError> {
-        let sim = ctx.simulation::<M, Q>(model)?;
-        let built = Built {
-            units: ctx.units,
-            model: ctx.model_name,
-            species: ctx.scene.species.iter().map(|s| s.name.clone()).collect(),
-            moments: ctx.layout.moments.clone(),
-        };
-        Ok(self.0.use_simulation(sim, built))
+        let run = ctx.start::<M, Q>(model, &mut Quiet)?;
+        Ok(self.0.use_run(run))
     }
 }
 
@@ -990,11 +985,23 @@ impl Context<'_> {
         model: M,
         reporter: &mut dyn Reporter,
     ) -> Result<Summary, RunError> {
+        let mut run = self.start::<M, Q>(model, reporter)?;
+        run.advance(None, reporter)?;
+        run.finish()
+    }
+
+    /// The run set up to its first event (or to the checkpoint's stage): the loop, the
+    /// scene's thermostat for equilibration, and production's observers when the run starts
+    /// in production.
+    fn start<M: PairModel, Q: Scheduler>(
+        &self,
+        model: M,
+        reporter: &mut dyn Reporter,
+    ) -> Result<StagedRun<M, Q>, RunError> {
         let scene = self.scene;
         // A resumed run starts from its checkpoint's state and stage.
         let resume = self.options.resume.as_ref();
         let mut sim: Simulation<M, Q> = self.simulation(model)?;
-        sim.set_cancel(reporter.cancel_flag());
         let fault = scene.hmc.as_ref().map_or(0.0, |h| h.fault_fraction);
         if fault > 0.0 {
             sim.set_fault_fraction(fault, scene.seed);
@@ -1005,7 +1012,7 @@ impl Context<'_> {
         let source = resume
             .map(|(_, c)| c.source.clone())
             .or_else(|| self.options.source.clone());
-        let mut run = Driver {
+        let mut driver = Driver {
             saver: Saver::new(every, self.out, source),
             record: resume.map(|(_, c)| c.record.clone()).unwrap_or_default(),
             chain: resume.and_then(|(_, c)| c.chain.clone()).or_else(|| {
@@ -1019,8 +1026,8 @@ impl Context<'_> {
             halt: self.options.halt_after_checkpoint,
         };
         // With signal handlers installed every re-basing is a chance to stop (saved exactly).
-        let interruptible = crate::driver::interrupt::installed() && run.saver.can_save();
-        sim.set_pause_at_rebase((run.saver.active() || interruptible) && scene.hmc.is_none());
+        let interruptible = crate::driver::interrupt::installed() && driver.saver.can_save();
+        sim.set_pause_at_rebase((driver.saver.active() || interruptible) && scene.hmc.is_none());
 
         // Equilibration.
         let andersen = (scene.thermostat.kind == ThermostatKind::Andersen).then(|| Andersen {
@@ -1036,7 +1043,7 @@ impl Context<'_> {
         };
         let equilibrate = !matches!(eq_stop, Stop::Events(0) | Stop::Time(0.0));
         let hmc_eq = scene.hmc.as_ref().map_or(0, |h| h.equilibration_segments);
-        let mut stage = match resume {
+        let stage = match resume {
             Some((_, c)) => c.stage,
             None if equilibrate => Stage::Equilibration(left_of(eq_stop)),
             None if hmc_eq > 0 => Stage::Equilibration(Left::Segments(hmc_eq)),
@@ -1057,52 +1064,178 @@ impl Context<'_> {
         }
         reporter.start(&self.plan(andersen, eq_stop, hmc_eq, stop));
         if resume.is_none() && equilibrate {
-            run.record.had_thermostat = andersen.is_some();
+            driver.record.had_thermostat = andersen.is_some();
             if andersen.is_some() {
                 sim.set_thermostat(andersen);
             }
         }
-        if let Stage::Equilibration(left @ (Left::Events(_) | Left::Time(_))) = stage {
-            reporter.phase("equilibration", eq_stop);
-            run.plain(&mut sim, left, false, &mut Observers::default(), reporter)?;
-            reporter.done();
-            reporter.equilibrated(PhaseEnd {
-                events: sim.counters().events,
-                elapsed: sim.phase_elapsed(),
-                temperature: self
-                    .units
-                    .temperature_out(2.0 * sim.kinetic_energy() / sim.dof()),
-            });
-            run.record.equilibration_events = sim.counters().events;
-            stage = if hmc_eq > 0 {
-                Stage::Equilibration(Left::Segments(hmc_eq))
-            } else {
-                Stage::Production(Left::Events(0))
-            };
-        }
-        let production_thermostat =
-            andersen.filter(|_| scene.thermostat.during == ThermostatPhase::Always);
-        let had_thermostat = run.record.had_thermostat;
-        let fresh_production =
-            !matches!(resume, Some((_, c)) if matches!(c.stage, Stage::Production(_)));
-        if fresh_production && had_thermostat != production_thermostat.is_some() {
-            sim.set_thermostat(production_thermostat);
-        }
-        if let Stage::Equilibration(Left::Segments(left)) = stage {
-            // HMC equilibration segments (not recorded).
-            if !sim.at_origin() {
-                sim.begin_phase(had_thermostat, None, None);
-                sim.move_origin_here();
+        let resumed_production = match resume {
+            Some((path, c)) if matches!(c.stage, Stage::Production(_)) => {
+                Some((path.clone(), c.observers.clone()))
             }
-            reporter.phase("hmc equilibration", Stop::Events(hmc_eq));
-            run.segments(&mut sim, left, false, reporter)?;
-            reporter.done();
-        }
+            _ => None,
+        };
+        let mut run = StagedRun {
+            fresh_production: resumed_production.is_none(),
+            sim,
+            scene: scene.clone(),
+            built: Built {
+                units: self.units,
+                model: self.model_name,
+                species: scene.species.iter().map(|s| s.name.clone()).collect(),
+                moments: self.layout.moments.clone(),
+            },
+            layout: self.layout.clone(),
+            lengths: self.config.lengths,
+            body_species: self.config.species.clone(),
+            out: self.out.map(Path::to_owned),
+            scene_name: scene_name(self.options),
+            smooth: self.smooth.take(),
+            driver,
+            andersen,
+            eq_stop,
+            hmc_eq,
+            stop,
+            stage,
+            open: false,
+            switched: false,
+            production: false,
+            ended: false,
+            observers: Observers::default(),
+            files: Vec::new(),
+            resumed_production,
+        };
+        run.settle(reporter)?;
+        Ok(run)
+    }
+}
 
-        // Production.
+/// Where [`StagedRun::advance`] stopped.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Halt {
+    /// The budget it was given is spent.
+    Budget,
+    /// The run is over (production ended).
+    Ended,
+    /// The current stage's length is in another unit than the budget (events against
+    /// simulated time); the stage is left where it was.
+    OtherUnit,
+}
+
+/// A scene's run in progress, stage by stage as `dmd run` runs it: equilibration (with the
+/// scene's thermostat), HMC equilibration segments, then production with the thermostat of
+/// `thermostat.during` and the observers of `[output]`. [`run_scene`] is [`build_run`] and
+/// one [`StagedRun::advance`] to the end; advancing in pieces runs the same stages.
+pub struct StagedRun<M: PairModel, Q: Scheduler> {
+    sim: Simulation<M, Q>,
+    scene: Scene,
+    built: Built,
+    layout: Layout,
+    lengths: DVec3,
+    body_species: Vec<u32>,
+    out: Option<std::path::PathBuf>,
+    scene_name: Option<String>,
+    /// The smooth estimator, until production's observers take it.
+    smooth: Option<Box<dyn crate::analysis::smooth::Evaluate>>,
+    driver: Driver,
+    andersen: Option<Andersen>,
+    eq_stop: Stop,
+    hmc_eq: u64,
+    /// Production's length.
+    stop: Stop,
+    stage: Stage,
+    /// The reporter was told that the current stage started.
+    open: bool,
+    /// Production's thermostat is set (it follows equilibration's).
+    switched: bool,
+    /// Production's observers are set up.
+    production: bool,
+    ended: bool,
+    /// Production did not start in a checkpoint this run continues.
+    fresh_production: bool,
+    observers: Observers,
+    /// The files [`StagedRun::finish`] wrote.
+    files: Vec<String>,
+    /// A checkpoint's file and observers, when it was saved in production.
+    resumed_production: Option<(std::path::PathBuf, ObserverState)>,
+}
+
+impl<M: PairModel, Q: Scheduler> StagedRun<M, Q> {
+    /// The loop.
+    pub fn simulation(&self) -> &Simulation<M, Q> {
+        &self.sim
+    }
+
+    /// What the run was built with.
+    pub fn built(&self) -> &Built {
+        &self.built
+    }
+
+    /// The current stage and what is left of it; `None` once the run is over.
+    pub fn stage(&self) -> Option<Stage> {
+        (!self.ended).then_some(self.stage)
+    }
+
+    /// The name of the current stage (`equilibration`, `hmc equilibration`, `production`,
+    /// `hmc production`), or `ended`.
+    pub fn stage_name(&self) -> &'static str {
+        match (self.ended, self.stage) {
+            (true, _) => "ended",
+            (false, Stage::Equilibration(Left::Segments(_))) => "hmc equilibration",
+            (false, Stage::Equilibration(_)) => "equilibration",
+            (false, Stage::Production(Left::Segments(_))) => "hmc production",
+            (false, Stage::Production(_)) => "production",
+        }
+    }
+
+    /// Starts what comes next without running an event: the reporter's phase, production's
+    /// thermostat after equilibration, production's observers.
+    fn settle(&mut self, reporter: &mut dyn Reporter) -> Result<(), RunError> {
+        if let Stage::Equilibration(Left::Events(_) | Left::Time(_)) = self.stage {
+            if !self.open {
+                reporter.phase("equilibration", self.eq_stop);
+                self.open = true;
+            }
+            return Ok(());
+        }
+        if !self.switched {
+            self.switched = true;
+            let production_thermostat = self
+                .andersen
+                .filter(|_| self.scene.thermostat.during == ThermostatPhase::Always);
+            if self.fresh_production
+                && self.driver.record.had_thermostat != production_thermostat.is_some()
+            {
+                self.sim.set_thermostat(production_thermostat);
+            }
+        }
+        if let Stage::Equilibration(Left::Segments(_)) = self.stage {
+            if !self.open {
+                // HMC equilibration segments (not recorded).
+                if !self.sim.at_origin() {
+                    self.sim
+                        .begin_phase(self.driver.record.had_thermostat, None, None);
+                    self.sim.move_origin_here();
+                }
+                reporter.phase("hmc equilibration", Stop::Events(self.hmc_eq));
+                self.open = true;
+            }
+            return Ok(());
+        }
+        if !self.production {
+            self.enter_production(reporter)?;
+        }
+        Ok(())
+    }
+
+    /// Production's observers and start: fresh, or those of the checkpoint saved in it.
+    fn enter_production(&mut self, reporter: &mut dyn Reporter) -> Result<(), RunError> {
+        self.production = true;
+        let scene = &self.scene;
         let o = &scene.output;
+        let lengths = self.lengths;
         let mut observers = Observers::default();
-        let lengths = self.config.lengths;
+        let resumed = self.resumed_production.take();
         if let Some(rdf) = &o.rdf {
             let r_max = rdf_r_max(scene, lengths)?;
             observers.rdf = Some(Rdf::new(rdf.bins as usize, r_max, rdf.every));
@@ -1126,17 +1259,17 @@ impl Context<'_> {
         if o.series {
             // Written to series.csv as it grows; a resumed run continues the file where its
             // checkpoint left it (the rows after it, from the stopped run, are cut off).
-            let path = self.out.map(|dir| dir.join("series.csv"));
-            let units = self.units.series();
-            observers.series = Some(match resume {
-                Some((_, c)) if !fresh_production => Series::resumed(
+            let path = self.out.as_deref().map(|dir| dir.join("series.csv"));
+            let units = self.built.units.series();
+            observers.series = Some(match &resumed {
+                Some((_, c)) => Series::resumed(
                     path.as_deref(),
                     units,
-                    &c.observers.series.clone().unwrap_or_default(),
+                    &c.series.clone().unwrap_or_default(),
                 )?,
-                _ => match &path {
+                None => match &path {
                     Some(p) => Series::streamed(p, units)?,
-                    None => Series::default(),
+                    None => Series::held(units),
                 },
             });
         }
@@ -1148,126 +1281,296 @@ impl Context<'_> {
                 .as_ref()
                 .is_some_and(|e| e.needs_attitudes())
             {
-                sim.set_sample_attitudes(true);
+                self.sim.set_sample_attitudes(true);
             }
             observers.smooth_every = o
                 .smooth_every
                 .unwrap_or(crate::config::scene::DEFAULT_SMOOTH_EVERY);
         }
         observers.max_bytes = Some(crate::config::limits::max_bytes(scene));
-        let out = self.out;
+        let out = self.out.as_deref();
         if let (Some(_), Some(dir)) = (&o.trajectory, out) {
             let path = dir.join("trajectory.xyz");
             let layout = self.layout.clone();
-            observers.trajectory = Some(match resume {
-                Some((_, c)) if !fresh_production => {
-                    let (len, frames) = c.observers.trajectory.unwrap_or((0, 0));
+            observers.trajectory = Some(match &resumed {
+                Some((_, c)) => {
+                    let (len, frames) = c.trajectory.unwrap_or((0, 0));
                     Trajectory::reopen(&path, layout, len, frames)?
                 }
-                _ => Trajectory::create(&path, layout)?,
+                None => Trajectory::create(&path, layout)?,
             });
         }
         if let (Some(_), Some(dir)) = (&o.gsd, out) {
             let path = dir.join("trajectory.gsd");
             let layout = self.layout.clone();
-            observers.gsd = Some(match resume {
-                Some((_, c)) if !fresh_production => {
-                    GsdTrajectory::reopen(&path, layout, c.observers.gsd.unwrap_or(0))?
+            observers.gsd = Some(match &resumed {
+                Some((_, c)) => GsdTrajectory::reopen(&path, layout, c.gsd.unwrap_or(0))?,
+                None => GsdTrajectory::create(&path, layout)?,
+            });
+        }
+        match resumed {
+            None => {
+                let had_thermostat = self.driver.record.had_thermostat;
+                let production_thermostat = self
+                    .andersen
+                    .filter(|_| scene.thermostat.during == ThermostatPhase::Always);
+                let wants_samples = observers.rdf.is_some()
+                    || observers.correlations.is_some()
+                    || observers.series.is_some()
+                    || observers.samples.is_some();
+                let interval = |t: &Option<crate::config::scene::TrajectorySpec>| {
+                    t.as_ref().filter(|_| out.is_some()).map(|t| t.interval)
+                };
+                let sim = &mut self.sim;
+                sim.begin_phase_with_frames(
+                    had_thermostat && production_thermostat.is_none(),
+                    o.sample_interval.filter(|_| wants_samples),
+                    [interval(&o.trajectory), interval(&o.gsd)],
+                );
+                if scene.hmc.is_some() {
+                    sim.move_origin_here();
                 }
-                _ => GsdTrajectory::create(&path, layout)?,
-            });
-        }
-        if fresh_production {
-            let wants_samples = observers.rdf.is_some()
-                || observers.correlations.is_some()
-                || observers.series.is_some()
-                || observers.samples.is_some();
-            let interval = |t: &Option<crate::config::scene::TrajectorySpec>| {
-                t.as_ref().filter(|_| out.is_some()).map(|t| t.interval)
-            };
-            sim.begin_phase_with_frames(
-                had_thermostat && production_thermostat.is_none(),
-                o.sample_interval.filter(|_| wants_samples),
-                [interval(&o.trajectory), interval(&o.gsd)],
-            );
-            if scene.hmc.is_some() {
-                sim.move_origin_here();
+                // NVE production starts at the bath temperature, not wherever the stochastic
+                // thermostat left the kinetic energy (as the smd engine's last rescaling does).
+                if had_thermostat
+                    && scene.hmc.is_none()
+                    && scene.thermostat.rescales_at_end()
+                    && let Some(a) = self.andersen
+                {
+                    sim.rescale_to_temperature(a.temperature);
+                }
+                let (p0, _) = sim.momentum_and_mass();
+                let k0 = sim.kinetic_energy();
+                self.driver.record.start = Some((
+                    k0,
+                    k0 + sim.potential_energy(),
+                    p0.to_array(),
+                    sim.momentum_scale(),
+                ));
+                self.driver.record.search_start = SearchStats::from_report(&sim.model().report());
+                self.stage = Stage::Production(match &scene.hmc {
+                    Some(h) => Left::Segments(h.segments),
+                    None => left_of(self.stop),
+                });
             }
-            // NVE production starts at the bath temperature, not wherever the stochastic
-            // thermostat left the kinetic energy (as the smd engine's last rescaling does).
-            if had_thermostat
-                && scene.hmc.is_none()
-                && scene.thermostat.rescales_at_end()
-                && let Some(a) = andersen
-            {
-                sim.rescale_to_temperature(a.temperature);
+            Some((path, c)) => {
+                let l = lengths;
+                crate::driver::checkpoint::check_observers(
+                    &c,
+                    observers.rdf.as_ref(),
+                    observers.correlations.as_ref(),
+                    &self.body_species,
+                    l.x * l.y * l.z,
+                )
+                .map_err(|m| CheckpointError {
+                    path,
+                    problem: Problem::Inconsistent(
+                        crate::engine::simulation::StateError(m).to_string(),
+                    ),
+                })?;
+                observers.rdf = c.rdf;
+                observers.correlations = c.correlations;
+                observers.samples = c.samples;
             }
-            let (p0, _) = sim.momentum_and_mass();
-            let k0 = sim.kinetic_energy();
-            run.record.start = Some((
-                k0,
-                k0 + sim.potential_energy(),
-                p0.to_array(),
-                sim.momentum_scale(),
-            ));
-            run.record.search_start = SearchStats::from_report(&sim.model().report());
-            stage = Stage::Production(match &scene.hmc {
-                Some(h) => Left::Segments(h.segments),
-                None => left_of(stop),
-            });
-        } else if let Some((path, c)) = resume {
-            let l = self.config.lengths;
-            crate::driver::checkpoint::check_observers(
-                &c.observers,
-                observers.rdf.as_ref(),
-                observers.correlations.as_ref(),
-                &self.config.species,
-                l.x * l.y * l.z,
-            )
-            .map_err(|m| CheckpointError {
-                path: path.clone(),
-                problem: Problem::Inconsistent(
-                    crate::engine::simulation::StateError(m).to_string(),
-                ),
-            })?;
-            observers.rdf = c.observers.rdf.clone();
-            observers.correlations = c.observers.correlations.clone();
-            observers.samples = c.observers.samples.clone();
         }
-        let (k0, e0, p0, p_scale) = run.record.start.expect("set when production starts");
-        let p0 = DVec3::from_array(p0);
-        let search0 = run.record.search_start;
+        if let Some(c) = &mut self.driver.chain
+            && scene.hmc.is_some()
+        {
+            c.recording = true;
+        }
+        self.observers = observers;
         reporter.phase(
-            if scene.hmc.is_some() {
+            if self.scene.hmc.is_some() {
                 "hmc production"
             } else {
                 "production"
             },
-            stop,
+            self.stop,
         );
-        let wall = Instant::now();
-        let cpu0 = thread_cpu_seconds();
-        let (wall_before, cpu_before) = run.record.seconds;
-        run.started = Some((wall, cpu0));
-        match stage {
-            Stage::Production(Left::Segments(left)) => {
-                if let Some(c) = &mut run.chain {
-                    c.recording = true;
-                }
-                run.segments(&mut sim, left, true, reporter)?;
-            }
-            Stage::Production(left) => run.plain(&mut sim, left, true, &mut observers, reporter)?,
-            Stage::Equilibration(_) => unreachable!("equilibration ended above"),
-        }
-        let wall_seconds = wall_before + wall.elapsed().as_secs_f64();
-        let cpu_seconds = cpu_before
-            + match (cpu0, thread_cpu_seconds()) {
-                (Some(a), Some(b)) => b - a,
-                _ => wall.elapsed().as_secs_f64(),
-            };
-        reporter.done();
+        self.open = true;
+        Ok(())
+    }
 
-        // Summary.
+    /// Runs the stages from where the run stands, for at most `budget` (events, or simulated
+    /// time; `None`: to the end of the run). A stage of HMC segments runs whole segments while
+    /// the budget lasts. Pieces of a stage run exactly as the whole stage would, except that
+    /// the time integrals are summed piece by piece (round-off only).
+    ///
+    /// # Errors
+    /// [`RunError`] as [`run_scene`] (a cancelled run: `RunError::Sim(SimError::Cancelled)`,
+    /// the state whole).
+    pub fn advance(
+        &mut self,
+        budget: Option<Stop>,
+        reporter: &mut dyn Reporter,
+    ) -> Result<Halt, RunError> {
+        self.sim.set_cancel(reporter.cancel_flag());
+        let mut budget = budget;
+        loop {
+            if self.ended {
+                return Ok(Halt::Ended);
+            }
+            match budget {
+                Some(Stop::Events(0)) => return Ok(Halt::Budget),
+                Some(Stop::Time(t)) if t <= 0.0 => return Ok(Halt::Budget),
+                _ => {}
+            }
+            let production = matches!(self.stage, Stage::Production(_));
+            let (left, put): (Left, fn(Left) -> Stage) = match self.stage {
+                Stage::Equilibration(l) => (l, Stage::Equilibration),
+                Stage::Production(l) => (l, Stage::Production),
+            };
+            let (e0, t0) = (self.driver.events, self.sim.time());
+            if production {
+                self.driver.started = Some((Instant::now(), thread_cpu_seconds()));
+            }
+            let result = match left {
+                Left::Segments(n) => {
+                    let take = if budget.is_none() { n } else { n.min(1) };
+                    self.driver
+                        .segments(&mut self.sim, n, take, production, reporter)
+                        .map(|()| Left::Segments(n - take))
+                }
+                _ => {
+                    let (piece, rest) = match (left, budget) {
+                        (l, None) => (l, None),
+                        (Left::Events(n), Some(Stop::Events(b))) => {
+                            (Left::Events(n.min(b)), Some(Left::Events(n - n.min(b))))
+                        }
+                        (Left::Time(t), Some(Stop::Time(b))) if b < t => {
+                            (Left::Time(b), Some(Left::Time(t - b)))
+                        }
+                        (Left::Time(t), Some(Stop::Time(_))) => (Left::Time(t), None),
+                        _ => return Ok(Halt::OtherUnit),
+                    };
+                    let mut none = Observers::default();
+                    let observers = if production {
+                        &mut self.observers
+                    } else {
+                        &mut none
+                    };
+                    self.driver
+                        .plain(&mut self.sim, piece, production, observers, reporter)
+                        .map(|()| match rest {
+                            Some(Left::Events(0)) | None => Left::Events(0),
+                            Some(l) => l,
+                        })
+                }
+            };
+            if production && let Some((wall, cpu0)) = self.driver.started.take() {
+                let seconds = &mut self.driver.record.seconds;
+                seconds.0 += wall.elapsed().as_secs_f64();
+                seconds.1 += match (cpu0, thread_cpu_seconds()) {
+                    (Some(a), Some(b)) => b - a,
+                    _ => wall.elapsed().as_secs_f64(),
+                };
+            }
+            let rest = result?;
+            budget = match budget {
+                Some(Stop::Events(b)) => {
+                    Some(Stop::Events(b.saturating_sub(self.driver.events - e0)))
+                }
+                Some(Stop::Time(b)) => Some(Stop::Time(b - (self.sim.time() - t0))),
+                None => None,
+            };
+            let over = matches!(rest, Left::Events(0) | Left::Segments(0));
+            self.stage = put(rest);
+            if over {
+                self.end_stage(reporter)?;
+            } else if matches!(left, Left::Time(_)) {
+                // A piece of a stage in time ends at the budget's end exactly.
+                budget = Some(Stop::Time(0.0));
+            }
+        }
+    }
+
+    /// The current stage ended: report it and start the next.
+    fn end_stage(&mut self, reporter: &mut dyn Reporter) -> Result<(), RunError> {
+        reporter.done();
+        match self.stage {
+            Stage::Production(_) => {
+                self.ended = true;
+                return Ok(());
+            }
+            Stage::Equilibration(Left::Segments(_)) => {
+                self.stage = Stage::Production(Left::Events(0));
+            }
+            Stage::Equilibration(_) => {
+                let sim = &self.sim;
+                reporter.equilibrated(PhaseEnd {
+                    events: sim.counters().events,
+                    elapsed: sim.phase_elapsed(),
+                    temperature: self
+                        .built
+                        .units
+                        .temperature_out(2.0 * sim.kinetic_energy() / sim.dof()),
+                });
+                self.driver.record.equilibration_events = sim.counters().events;
+                self.stage = if self.hmc_eq > 0 {
+                    Stage::Equilibration(Left::Segments(self.hmc_eq))
+                } else {
+                    Stage::Production(Left::Events(0))
+                };
+            }
+        }
+        self.open = false;
+        self.settle(reporter)
+    }
+
+    /// The checkpoint of the run as it stands (between two advances): the time origin is
+    /// re-based first, so the run and one resumed from the file continue identically.
+    ///
+    /// # Errors
+    /// [`RunError::Checkpoint`] or an output's error (marking the trajectories' ends).
+    pub fn checkpoint(&mut self, source: SceneSource) -> Result<Checkpoint, RunError> {
+        if !self.sim.at_origin() {
+            self.sim.rebase();
+        }
+        let trajectory = match &mut self.observers.trajectory {
+            Some(t) => Some(t.mark()?),
+            None => None,
+        };
+        let gsd = match &mut self.observers.gsd {
+            Some(g) => Some(g.mark()?),
+            None => None,
+        };
+        let series = match &mut self.observers.series {
+            Some(s) => Some(s.mark()?),
+            None => None,
+        };
+        let observers = &self.observers;
+        Ok(Checkpoint {
+            source,
+            every: None,
+            stage: self.stage,
+            sim: self.sim.save_state(),
+            record: self.driver.record.clone(),
+            observers: ObserverState {
+                rdf: observers.rdf.clone(),
+                correlations: observers.correlations.clone(),
+                series,
+                trajectory,
+                gsd,
+                samples: observers.samples.clone(),
+            },
+            chain: self.driver.chain.clone(),
+        })
+    }
+
+    /// The summary of production so far (all of it once the run has ended), as `dmd run`
+    /// writes it; `None` before production (in equilibration).
+    pub fn summary(&self) -> Option<Summary> {
+        if !self.production {
+            return None;
+        }
+        let scene = &self.scene;
+        let sim = &self.sim;
+        let observers = &self.observers;
+        let (wall_seconds, cpu_seconds) = self.driver.record.seconds;
+        let (k0, e0, p0, p_scale) = self.driver.record.start?;
+        let p0 = DVec3::from_array(p0);
+        let search0 = self.driver.record.search_start;
+        let lengths = self.lengths;
         let counters = sim.counters();
         let anomalies = sim.anomalies();
         let n = sim.bodies().len() as f64;
@@ -1295,7 +1598,7 @@ impl Context<'_> {
         let search = SearchStats::from_report(&search)
             .zip(search0)
             .map(|(a, b)| a.since(&b));
-        let u = self.units;
+        let u = self.built.units;
         let excess = if t > 0.0 {
             sim.virial() / (3.0 * t * volume)
         } else {
@@ -1335,11 +1638,11 @@ impl Context<'_> {
             .as_ref()
             .map(|s| s.summary(n as usize, dof, sim.model().rotational_dof()));
         let diffusion = Correlations::diffusions(observers.correlations.as_ref());
-        let mut summary = Summary {
+        let summary = Summary {
             engine: "dmd".to_owned(),
             events: counters.events,
             events_by_kind: by_kind,
-            equilibration_events: run.record.equilibration_events,
+            equilibration_events: self.driver.record.equilibration_events,
             wall_seconds,
             cpu_seconds,
             events_per_second: counters.events as f64 / wall_seconds,
@@ -1387,7 +1690,7 @@ impl Context<'_> {
             momentum_drift: (p1 - p0).length() / p_scale,
             anomalies: anomalies.total() + search.map_or(0, |s| s.failures),
             anomalies_by_kind,
-            model: self.model_name.to_owned(),
+            model: self.built.model.to_owned(),
             units: match scene.units {
                 crate::config::scene::UnitSystem::Reduced => "reduced",
                 crate::config::scene::UnitSystem::Molecular => "molecular",
@@ -1438,33 +1741,69 @@ impl Context<'_> {
                 .map(str::to_owned)
                 .collect(),
             seed: scene.seed,
-            files: Vec::new(),
-            hmc: run
+            files: self.files.clone(),
+            hmc: self
+                .driver
                 .chain
                 .as_ref()
                 .map(|c| hmc_out(c.summary(n as usize), &u)),
             bond_error: sim.model().bond_error_at(sim.now()),
             rattle: crate::models::flexible::FlexStats::from_report(&sim.model().report()),
         };
-        if let Some(dir) = out {
-            let info = PlotInfo {
-                scene: scene_name(self.options),
-                n: summary.n_bodies,
-                temperature: summary.temperature,
-                density: summary.density,
-                terrace_step: terrace_step(self.scene, &self.units),
-                species: self.scene.species.iter().map(|s| s.name.clone()).collect(),
-                pressure: (summary.pressure, summary.pressure_error),
-                potential_per_body: (
-                    summary.potential_energy_per_body,
-                    summary.potential_energy_per_body_error,
-                ),
-            };
-            summary.files = write_observables(dir, &mut observers, o.plots, &self.units, &info)?;
-            if let Some(series) = run.chain.as_ref().and_then(|c| c.series.as_ref()) {
-                write_hmc_series(&dir.join("hmc.csv"), series, &self.units)?;
+        Some(summary)
+    }
+
+    /// What the plots and tables of the run say besides their data.
+    fn plot_info(&self, summary: &Summary) -> PlotInfo {
+        PlotInfo {
+            scene: self.scene_name.clone(),
+            n: summary.n_bodies,
+            temperature: summary.temperature,
+            density: summary.density,
+            terrace_step: terrace_step(&self.scene, &self.built.units),
+            species: self.built.species.clone(),
+            pressure: (summary.pressure, summary.pressure_error),
+            potential_per_body: (
+                summary.potential_energy_per_body,
+                summary.potential_energy_per_body_error,
+            ),
+        }
+    }
+
+    /// The observables' tables of production so far (`rdf`, `msd`, `vacf`, `oacf`,
+    /// `series`: the columns and numbers of their CSV files); empty before production.
+    pub fn tables(&mut self) -> Vec<ObservableTable> {
+        let Some(summary) = self.summary() else {
+            return Vec::new();
+        };
+        let info = self.plot_info(&summary);
+        observable_tables(&mut self.observers, &self.built.units, &info)
+    }
+
+    /// The summary of the ended run, with every file of `[output]` written into the run's
+    /// folder (once: the trajectories are closed).
+    ///
+    /// # Errors
+    /// An output's error.
+    pub fn finish(&mut self) -> Result<Summary, RunError> {
+        let mut summary = self
+            .summary()
+            .expect("a run that has ended has been in production");
+        if let Some(dir) = self.out.clone() {
+            let info = self.plot_info(&summary);
+            let units = self.built.units;
+            summary.files = write_observables(
+                &dir,
+                &mut self.observers,
+                self.scene.output.plots,
+                &units,
+                &info,
+            )?;
+            if let Some(series) = self.driver.chain.as_ref().and_then(|c| c.series.as_ref()) {
+                write_hmc_series(&dir.join("hmc.csv"), series, &units)?;
                 summary.files.push("hmc.csv".to_owned());
             }
+            self.files.clone_from(&summary.files);
             let json = serde_json::to_string_pretty(&summary).expect("a summary serialises");
             write_atomically(&dir.join("summary.json"), json.as_bytes())?;
         }
@@ -1545,15 +1884,17 @@ impl Driver {
         }
     }
 
-    /// Runs `left` HMC segments, saving checkpoints between them when due.
+    /// Runs `take` of the `left` HMC segments of a stage, saving checkpoints between them when
+    /// due.
     fn segments<M: PairModel, Q: Scheduler>(
         &mut self,
         sim: &mut Simulation<M, Q>,
         left: u64,
+        take: u64,
         production: bool,
         reporter: &mut dyn Reporter,
     ) -> Result<(), RunError> {
-        for k in 0..left {
+        for k in 0..take.min(left) {
             let chain = self.chain.as_mut().expect("a scene with [hmc] has a chain");
             let seg = chain.segment(sim)?;
             self.events += seg.events;
