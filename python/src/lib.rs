@@ -139,7 +139,7 @@ trait Engine: Send {
     fn stage_name(&self) -> &'static str;
     fn stage(&self) -> Option<Stage>;
     fn summary(&self) -> Option<Summary>;
-    fn tables(&mut self) -> Vec<ObservableTable>;
+    fn tables(&mut self) -> Result<Vec<ObservableTable>, DmdRunError>;
     /// The ended run's summary, its files written (with an output folder).
     fn finish(&mut self) -> Result<Summary, DmdRunError>;
     /// Re-bases the time origin (where a state is exact) and returns the checkpoint of it.
@@ -233,8 +233,8 @@ impl<M: PairModel + Send, Q: Scheduler + Send> Engine for Held<M, Q> {
     fn summary(&self) -> Option<Summary> {
         self.run.summary()
     }
-    fn tables(&mut self) -> Vec<ObservableTable> {
-        self.run.tables()
+    fn tables(&mut self) -> Result<Vec<ObservableTable>, DmdRunError> {
+        Ok(self.run.tables()?)
     }
     fn finish(&mut self) -> Result<Summary, DmdRunError> {
         self.run.finish()
@@ -462,7 +462,7 @@ impl Simulation {
 
     /// The observables of production so far: `{name: {column: array}}`.
     fn observables<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let tables = self.engine()?.tables();
+        let tables = self.engine()?.tables().map_err(to_py)?;
         let d = PyDict::new(py);
         for t in tables {
             let columns = PyDict::new(py);

@@ -707,21 +707,7 @@ impl Series {
             return Ok(Vec::new());
         };
         f.mark()?;
-        let path = f.temporary_path().to_owned();
-        let bad = |e: &dyn std::fmt::Display| OutputError {
-            path: path.clone(),
-            message: format!("cannot read back the series: {e}"),
-        };
-        let text = std::fs::read_to_string(&path).map_err(|e| bad(&e))?;
-        text.lines()
-            .skip(1)
-            .map(|l| {
-                l.split(',')
-                    .map(str::parse)
-                    .collect::<Result<Vec<f64>, _>>()
-                    .map_err(|e| bad(&e))
-            })
-            .collect()
+        crate::analysis::output::read_csv_rows(f.temporary_path())
     }
 
     /// The series of a resumed run, continuing `path` where `state` left it (`path: None`:

@@ -228,6 +228,27 @@ impl CsvStream {
     }
 }
 
+/// The rows of a CSV file this module wrote (its header skipped), back as the numbers written.
+///
+/// # Errors
+/// [`OutputError`] if the file cannot be read or holds a cell that is not a number.
+pub fn read_csv_rows(path: &Path) -> Result<Vec<Vec<f64>>, OutputError> {
+    let bad = |e: &dyn std::fmt::Display| OutputError {
+        path: path.to_owned(),
+        message: format!("cannot read the table back: {e}"),
+    };
+    let text = std::fs::read_to_string(path).map_err(|e| bad(&e))?;
+    text.lines()
+        .skip(1)
+        .map(|l| {
+            l.split(',')
+                .map(str::parse)
+                .collect::<Result<Vec<f64>, _>>()
+                .map_err(|e| bad(&e))
+        })
+        .collect()
+}
+
 /// A horizontal line at a curve's mean, with a shaded band of ± its error.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Mean {

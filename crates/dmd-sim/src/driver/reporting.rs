@@ -258,15 +258,17 @@ pub(crate) fn write_observables(
 }
 
 /// The observables' tables, the numbers [`write_observables`] writes, without writing anything.
+///
+/// # Errors
+/// [`OutputError`] if the series' stream cannot be flushed or read back.
 pub(crate) fn observable_tables(
     obs: &mut Observers,
     units: &Units,
     info: &PlotInfo,
-) -> Vec<ObservableTable> {
+) -> Result<Vec<ObservableTable>, OutputError> {
     let mut tables = Vec::new();
-    observables(None, obs, false, units, info, &mut tables)
-        .expect("nothing is written without a folder");
-    tables
+    observables(None, obs, false, units, info, &mut tables)?;
+    Ok(tables)
 }
 
 /// [`write_observables`] into `dir` (with `None`: no file, no plot, the trajectories left

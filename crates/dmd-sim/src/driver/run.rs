@@ -1771,13 +1771,33 @@ impl<M: PairModel, Q: Scheduler> StagedRun<M, Q> {
     }
 
     /// The observables' tables of production so far (`rdf`, `msd`, `vacf`, `oacf`,
-    /// `series`: the columns and numbers of their CSV files); empty before production.
-    pub fn tables(&mut self) -> Vec<ObservableTable> {
+    /// `series`: the columns and numbers of their CSV files); empty before production. Once
+    /// [`finish`](Self::finish) has closed `series.csv`, its rows are read from the folder.
+    ///
+    /// # Errors
+    /// [`OutputError`] if the series cannot be read back.
+    pub fn tables(&mut self) -> Result<Vec<ObservableTable>, OutputError> {
         let Some(summary) = self.summary() else {
-            return Vec::new();
+            return Ok(Vec::new());
         };
         let info = self.plot_info(&summary);
-        observable_tables(&mut self.observers, &self.built.units, &info)
+        let mut tables = observable_tables(&mut self.observers, &self.built.units, &info)?;
+        if let (true, None, Some(dir)) = (
+            self.scene.output.series,
+            &self.observers.series,
+            self.out.as_deref(),
+        ) {
+            let path = dir.join("series.csv");
+            tables.push(ObservableTable {
+                name: "series".to_owned(),
+                columns: crate::analysis::observable::SERIES_HEADER
+                    .iter()
+                    .map(|s| (*s).to_owned())
+                    .collect(),
+                rows: crate::analysis::output::read_csv_rows(&path)?,
+            });
+        }
+        Ok(tables)
     }
 
     /// The summary of the ended run, with every file of `[output]` written into the run's
