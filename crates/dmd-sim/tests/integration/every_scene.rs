@@ -16,7 +16,7 @@ use crate::support::{
 
 /// Events of the shortened runs (equilibration, production) and between re-basings, so that
 /// checkpoints (taken at re-basings) fall mid-production with re-basings before and after.
-/// Water and benzene cost milliseconds per event in a test build, so every event here counts.
+/// Water and benzene cost about half a millisecond of CPU per event in a test build.
 const EQUILIBRATION: u64 = 500;
 const PRODUCTION: u64 = 1_500;
 const REBASE: u64 = 350;
