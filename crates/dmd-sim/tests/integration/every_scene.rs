@@ -3,6 +3,9 @@
 //! same files), checked for conservation, run as an HMC chain, and its trajectory read back. A
 //! scene added to `scenes/` is covered without a change here.
 
+use std::collections::BTreeMap;
+use std::sync::Mutex;
+
 use dmd_sim::checkpoint::{self, Every};
 use dmd_sim::run::{RunError, Summary};
 use dmd_sim::scene::Scene;
@@ -12,11 +15,12 @@ use crate::support::{
 };
 
 /// Events of the shortened runs (equilibration, production) and between re-basings, so that
-/// checkpoints (taken at re-basings) fall mid-production.
-const EQUILIBRATION: u64 = 1_000;
-const PRODUCTION: u64 = 3_000;
-const REBASE: u64 = 700;
-const CHECKPOINT_EVERY: u64 = 2_000;
+/// checkpoints (taken at re-basings) fall mid-production with re-basings before and after.
+/// Water and benzene cost about half a millisecond of CPU per event in a test build.
+const EQUILIBRATION: u64 = 500;
+const PRODUCTION: u64 = 1_500;
+const REBASE: u64 = 350;
+const CHECKPOINT_EVERY: u64 = 1_000;
 
 /// A shipped scene, shortened.
 struct Short {
@@ -105,12 +109,18 @@ fn straight(s: &Short, ov: &[String], tag: &str) -> (Summary, std::path::PathBuf
     (sum, dir)
 }
 
-/// The production's simulated time of the shortened scene (to place samples and frames).
-fn production_time(s: &Short, tag: &str) -> f64 {
-    let (sum, dir) = straight(s, &s.base, &format!("probe-{tag}"));
-    let _ = std::fs::remove_dir_all(dir);
-    assert!(sum.sim_time > 0.0, "{}: {}", s.name, sum.sim_time);
-    sum.sim_time
+/// The production's simulated time of the shortened scene (to place samples and frames),
+/// from one probe run per scene shared by both tests (the lock is held through the probe, so
+/// the other test waits for it instead of running it again).
+fn production_time(s: &Short) -> f64 {
+    static TIMES: Mutex<BTreeMap<String, f64>> = Mutex::new(BTreeMap::new());
+    let mut times = TIMES.lock().unwrap();
+    *times.entry(s.name.clone()).or_insert_with(|| {
+        let (sum, dir) = straight(s, &s.base, "probe");
+        let _ = std::fs::remove_dir_all(dir);
+        assert!(sum.sim_time > 0.0, "{}: {}", s.name, sum.sim_time);
+        sum.sim_time
+    })
 }
 
 /// The frames of an extended XYZ file: per frame the body count and the comment line.
@@ -142,7 +152,7 @@ fn xyz_frames(text: &str) -> Vec<(usize, String)> {
 #[test]
 fn every_scene_resumes_bit_for_bit_conserves_energy_and_writes_its_trajectory() {
     for s in scenes() {
-        let t = production_time(&s, "resume");
+        let t = production_time(&s);
         let outputs = if s.hmc {
             strings(&["hmc.series=true"])
         } else {
@@ -215,7 +225,7 @@ fn every_scene_resumes_bit_for_bit_conserves_energy_and_writes_its_trajectory() 
 #[test]
 fn every_scene_runs_as_an_hmc_chain_that_accepts_its_exact_segments() {
     for s in scenes().into_iter().filter(|s| !s.hmc) {
-        let t = production_time(&s, "hmc");
+        let t = production_time(&s);
         let ov = with(
             &s.base
                 .iter()

@@ -10,10 +10,10 @@
 //! checkpoints an exit status of `dmd resume` other than 0, 1 or 2 (no abort, no panic).
 //! Findings are written to `$CARGO_TARGET_TMPDIR/fuzz-findings/` and fail the test.
 //!
-//! Each target runs `DMD_FUZZ_SECONDS` seconds (3 by default, so `cargo test` tries a few
-//! thousand inputs) from seed `DMD_FUZZ_SEED` (fixed by default, so a failure repeats);
-//! `cargo xtask fuzz --minutes M` runs them longer with a fresh seed and prints how many inputs
-//! each tried.
+//! Each target runs `DMD_FUZZ_SECONDS` seconds (1 by default, so `cargo test` tries every seed
+//! input and hundreds to thousands of mutations of them) from seed `DMD_FUZZ_SEED` (fixed by
+//! default, so a failure repeats); `cargo xtask fuzz --minutes M` runs them longer with a fresh
+//! seed and prints how many inputs each tried.
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
@@ -126,7 +126,7 @@ fn budget(target: &str) -> (Duration, u64) {
         .ok()
         .and_then(|s| s.parse::<f64>().ok())
         .filter(|s| s.is_finite() && *s >= 0.0)
-        .unwrap_or(3.0);
+        .unwrap_or(1.0);
     let seed = std::env::var("DMD_FUZZ_SEED")
         .ok()
         .and_then(|s| s.parse::<u64>().ok())
