@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use crate::support::{run_and_signal, signal_then_resume_is_bit_for_bit};
+use crate::support::{WELL_FLUID, run_and_signal, signal_then_resume_is_bit_for_bit};
 
 const SCENE: &str = r#"version = 1
 [box]
@@ -253,33 +253,20 @@ fn a_series_that_outgrows_its_limit_stops_the_run() {
     let _ = std::fs::remove_dir_all(d);
 }
 
-const LONG: &str = r#"version = 1
-[box]
-density = 0.5
-[[species]]
-name = "A"
-count = 108
-[[pair]]
-species = ["A", "A"]
-steps = [[1.0, inf], [1.5, -1.0]]
-[init]
-positions = "fcc"
-temperature = 1.5
-[run]
-events = 4e6
-[output]
-sample_interval = 0.5
-series = true
-msd = { max_lag = 5 }
-trajectory = { interval = 20 }
-"#;
+/// The fluid of `support` running 4·10⁶ events with a series, an MSD and a trajectory.
+fn long() -> String {
+    format!(
+        "{WELL_FLUID}[run]\nevents = 4e6\n[output]\nsample_interval = 0.5\nseries = true\n\
+         msd = {{ max_lag = 5 }}\ntrajectory = {{ interval = 20 }}\n"
+    )
+}
 
 #[test]
 fn a_signal_stops_the_run_with_a_checkpoint_that_resumes_bit_for_bit() {
     let d = dir("signal");
     // 1.5·10⁶ events: seconds of a run, of which the signal, 0.2 s into production, stops the
     // first part at a re-basing.
-    let text = LONG.replace("events = 4e6\n", "events = 1.5e6\nrebase_events = 1e5\n");
+    let text = long().replace("events = 4e6\n", "events = 1.5e6\nrebase_events = 1e5\n");
     signal_then_resume_is_bit_for_bit(&d, &text, &["series.csv", "msd.csv", "trajectory.xyz"]);
     let _ = std::fs::remove_dir_all(d);
 }
@@ -293,7 +280,7 @@ fn a_run_stopped_twice_at_varying_moments_resumes_bit_for_bit() {
     let s = d.join("scene.toml");
     std::fs::write(
         &s,
-        LONG.replace("events = 4e6\n", "events = 2e6\nrebase_events = 1e5\n"),
+        long().replace("events = 4e6\n", "events = 2e6\nrebase_events = 1e5\n"),
     )
     .unwrap();
     let moment = || {
@@ -436,7 +423,7 @@ fn a_second_signal_stops_the_run_at_once() {
     // Re-basings 1e9 events apart: the first signal alone would wait for the end of the run.
     let d = dir("signal-twice");
     let s = d.join("scene.toml");
-    let text = LONG.replace("events = 4e6\n", "events = 1e8\nrebase_events = 1e9\n");
+    let text = long().replace("events = 4e6\n", "events = 1e8\nrebase_events = 1e9\n");
     std::fs::write(&s, &text).unwrap();
     let out = d.join("out");
     let (o, took) = run_and_signal(&s, &out, 2);

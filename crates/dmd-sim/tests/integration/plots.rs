@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use crate::support::{scenes_dir, scratch};
+use crate::support::{WELL_FLUID, scenes_dir, scratch};
 
 /// Runs `dmd run scenes/<scene> --out <dir> --set …` (quietly) and returns the summary.
 fn dmd_run(scene: &str, dir: &Path, extra: &[&str], sets: &[&str]) -> serde_json::Value {
@@ -209,32 +209,15 @@ fn rods_plots_carry_units_and_name_the_system() {
 /// around the curves (where a point has an error: 16 time origins or configurations).
 #[test]
 fn correlation_and_rdf_plots_draw_their_error_bands() {
-    const FLUID: &str = r#"
-version = 1
-seed = 9
-[box]
-density = 0.5
-[[species]]
-name = "A"
-count = 108
-[[pair]]
-species = ["A", "A"]
-steps = [[1.0, inf], [1.5, -0.5]]
-[init]
-positions = "fcc"
-temperature = 1.5
-[run]
-time = 20.0
-[output]
-sample_interval = 0.05
-rdf = { bins = 30, r_max = 2.5, every = 1 }
-msd = { max_lag = 0.5 }
-vacf = { max_lag = 0.5 }
-"#;
+    let fluid = format!(
+        "{WELL_FLUID}[run]\ntime = 20.0\n[output]\nsample_interval = 0.05\n\
+         rdf = {{ bins = 30, r_max = 2.5, every = 1 }}\nmsd = {{ max_lag = 0.5 }}\n\
+         vacf = {{ max_lag = 0.5 }}\n"
+    );
     let dir = scratch("plots-bands");
     std::fs::create_dir_all(&dir).unwrap();
     let file = dir.join("fluid.toml");
-    std::fs::write(&file, FLUID).unwrap();
+    std::fs::write(&file, fluid).unwrap();
     let out = dir.join("out");
     let status = std::process::Command::new(env!("CARGO_BIN_EXE_dmd"))
         .args(["run", "--quiet", "--out"])

@@ -145,31 +145,15 @@ pub fn plan(scene: &Scene, first: PotentialSpec) -> Result<Built, SceneError> {
     impl Visit for Build<'_> {
         type Out = Result<Built, SceneError>;
         fn visit<K: Kind>(self, _: &K) -> Self::Out {
-            let scene = self.scene;
-            let scale = crate::config::units::Units::of(scene.units).energy;
-            let kt = scene.init.temperature;
-            let index = |n: &str| {
-                scene
-                    .species
-                    .iter()
-                    .position(|s| s.name == n)
-                    .expect("checked")
-            };
             let mut radial = Vec::new();
             let mut tables: Vec<PairTable<K::Terraced>> = Vec::new();
-            for (k, p) in scene.pair.iter().enumerate() {
-                let kind = p
-                    .potential
-                    .as_ref()
-                    .and_then(K::select)
-                    .expect("checked: one kind per scene");
-                let t = p.terraces.as_ref().expect("checked");
-                let pair = (index(&p.species[0]), index(&p.species[1]));
+            each_pair::<K>(self.scene, |k, pair, kind, t, kt, scale| {
                 match kind.radial_steps(k, t, kt, scale) {
                     Some(steps) => radial.push((pair, steps?)),
                     None => tables.push((pair, kind.terraces(k, t, kt, scale)?)),
                 }
-            }
+                Ok(())
+            })?;
             if !radial.is_empty() {
                 return Ok(Built::Radial(radial));
             }
@@ -183,6 +167,41 @@ pub fn plan(scene: &Scene, first: PotentialSpec) -> Result<Built, SceneError> {
         }
     }
     first.visit(Build { scene, first })
+}
+
+/// Calls `f(k, (species a, species b), keys, terraces, kT, energy scale)` for every pair table
+/// `k` of a checked scene of kind `K` (internal units; the scale converts energies in messages
+/// back to the scene's).
+fn each_pair<K: Kind>(
+    scene: &Scene,
+    mut f: impl FnMut(usize, (usize, usize), &K, &TerraceSpec, f64, f64) -> Result<(), SceneError>,
+) -> Result<(), SceneError> {
+    let scale = crate::config::units::Units::of(scene.units).energy;
+    let kt = scene.init.temperature;
+    let index = |n: &str| {
+        scene
+            .species
+            .iter()
+            .position(|s| s.name == n)
+            .expect("checked")
+    };
+    for (k, p) in scene.pair.iter().enumerate() {
+        let kind = p
+            .potential
+            .as_ref()
+            .and_then(K::select)
+            .expect("checked: one kind per scene");
+        let t = p.terraces.as_ref().expect("checked");
+        f(
+            k,
+            (index(&p.species[0]), index(&p.species[1])),
+            &kind,
+            t,
+            kt,
+            scale,
+        )?;
+    }
+    Ok(())
 }
 
 /// The smooth estimator of a scene whose smooth potentials run as radial steps (Lennard-Jones
@@ -204,28 +223,12 @@ pub fn radial_estimator(
     impl Visit for Estimate<'_> {
         type Out = Result<Option<Box<dyn crate::analysis::smooth::Evaluate>>, SceneError>;
         fn visit<K: Kind>(self, _: &K) -> Self::Out {
-            let scene = self.scene;
-            let scale = crate::config::units::Units::of(scene.units).energy;
-            let kt = scene.init.temperature;
-            let index = |n: &str| {
-                scene
-                    .species
-                    .iter()
-                    .position(|s| s.name == n)
-                    .expect("checked")
-            };
             let mut tables: Vec<PairTable<K::Terraced>> = Vec::new();
-            for (k, p) in scene.pair.iter().enumerate() {
-                let kind = p
-                    .potential
-                    .as_ref()
-                    .and_then(K::select)
-                    .expect("checked: one kind per scene");
-                let t = p.terraces.as_ref().expect("checked");
-                let pair = (index(&p.species[0]), index(&p.species[1]));
+            each_pair::<K>(self.scene, |k, pair, kind, t, kt, scale| {
                 tables.push((pair, kind.terraces(k, t, kt, scale)?));
-            }
-            <K::Terraced as Bodies>::estimator(scene, self.lengths, &tables)
+                Ok(())
+            })?;
+            <K::Terraced as Bodies>::estimator(self.scene, self.lengths, &tables)
         }
     }
     if !scene.wants_smooth_estimators() {

@@ -165,6 +165,22 @@ equilibration_time = 0.5
 time = 0.5
 "#;
 
+/// 108 square-well spheres (core σ, well 1.5σ deep ε) at ρσ³ = 0.5 from an fcc lattice at
+/// kT = 1.5ε, without `[run]` or `[output]`: tests add their own.
+pub(crate) const WELL_FLUID: &str = r#"version = 1
+[box]
+density = 0.5
+[[species]]
+name = "A"
+count = 108
+[[pair]]
+species = ["A", "A"]
+steps = [[1.0, inf], [1.5, -1.0]]
+[init]
+positions = "fcc"
+temperature = 1.5
+"#;
+
 /// Runs scene `text` with `overrides` (no output folder).
 pub(crate) fn run_with(text: &str, overrides: &[&str]) -> Summary {
     let o: Vec<String> = overrides.iter().map(|s| (*s).to_owned()).collect();
