@@ -128,6 +128,31 @@ pub struct CsvStream {
     error: Option<String>,
 }
 
+/// The temporary file `tmp` of an interrupted `what` (a table, a trajectory) cut to the `len`
+/// bytes a checkpoint recorded, for appending at its end.
+///
+/// # Errors
+/// [`OutputError`] if the file is missing or shorter than `len`.
+fn cut_to(tmp: &Path, len: u64, what: &str) -> Result<BufWriter<File>, OutputError> {
+    let f = std::fs::OpenOptions::new()
+        .write(true)
+        .open(tmp)
+        .map_err(|e| io_err(tmp, format!("cannot continue the {what}: {e}")))?;
+    let have = f.metadata().map_err(|e| io_err(tmp, e))?.len();
+    if have < len {
+        return Err(io_err(
+            tmp,
+            format!(
+                "cannot continue the {what}: it has {have} bytes, the checkpoint recorded {len}"
+            ),
+        ));
+    }
+    f.set_len(len).map_err(|e| io_err(tmp, e))?;
+    let mut out = BufWriter::new(f);
+    std::io::Seek::seek(&mut out, std::io::SeekFrom::End(0)).map_err(|e| io_err(tmp, e))?;
+    Ok(out)
+}
+
 impl CsvStream {
     /// The temporary file the rows go to until [`finish`](Self::finish).
     pub fn temporary_path(&self) -> &Path {
@@ -158,23 +183,7 @@ impl CsvStream {
     /// [`OutputError`] if the temporary file is missing or shorter than `len`.
     pub fn reopen(path: &Path, len: u64) -> Result<Self, OutputError> {
         let tmp = temporary(path);
-        let f = std::fs::OpenOptions::new()
-            .write(true)
-            .open(&tmp)
-            .map_err(|e| io_err(&tmp, format!("cannot continue the table: {e}")))?;
-        let have = f.metadata().map_err(|e| io_err(&tmp, e))?.len();
-        if have < len {
-            return Err(io_err(
-                &tmp,
-                format!(
-                    "cannot continue the table: it has {have} bytes, the checkpoint recorded \
-                     {len}"
-                ),
-            ));
-        }
-        f.set_len(len).map_err(|e| io_err(&tmp, e))?;
-        let mut out = BufWriter::new(f);
-        std::io::Seek::seek(&mut out, std::io::SeekFrom::End(0)).map_err(|e| io_err(&tmp, e))?;
+        let out = cut_to(&tmp, len, "table")?;
         Ok(CsvStream {
             path: path.to_owned(),
             tmp,
@@ -1032,23 +1041,7 @@ impl Trajectory {
     /// [`OutputError`] if the temporary file is missing or shorter than `len`.
     pub fn reopen(path: &Path, layout: Layout, len: u64, frames: u64) -> Result<Self, OutputError> {
         let tmp = temporary(path);
-        let f = std::fs::OpenOptions::new()
-            .write(true)
-            .open(&tmp)
-            .map_err(|e| io_err(&tmp, format!("cannot continue the trajectory: {e}")))?;
-        let have = f.metadata().map_err(|e| io_err(&tmp, e))?.len();
-        if have < len {
-            return Err(io_err(
-                &tmp,
-                format!(
-                    "cannot continue the trajectory: it has {have} bytes, the checkpoint \
-                     recorded {len}"
-                ),
-            ));
-        }
-        f.set_len(len).map_err(|e| io_err(&tmp, e))?;
-        let mut out = BufWriter::new(f);
-        std::io::Seek::seek(&mut out, std::io::SeekFrom::End(0)).map_err(|e| io_err(&tmp, e))?;
+        let out = cut_to(&tmp, len, "trajectory")?;
         Ok(Trajectory {
             path: path.to_owned(),
             tmp,
