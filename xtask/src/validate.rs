@@ -97,7 +97,7 @@ pub(crate) const CHECKS: &[Check] = &[
     },
     Check {
         name: "flexible",
-        title: "Semi-flexible molecules: RATTLE between events, error against run time for the RATTLE step, rigid limit, conservation",
+        title: "Semi-flexible molecules: RATTLE between events, error against run time for the RATTLE step, rigid limit, conservation, the measure of constrained dynamics and HMC",
         package: "dmd-sim",
         example: "validate_flexible",
         full: &[],

@@ -16,7 +16,7 @@ use std::time::Instant;
 
 use collide::Particle;
 use dmd_sim::checkpoint::{self, Every, SceneSource};
-use dmd_sim::hmc::{Acceptance, Chain, Ensemble, HmcSettings, block_average};
+use dmd_sim::hmc::{Acceptance, Chain, Ensemble, HmcSettings, Measure, block_average};
 use dmd_sim::model::{HardSpheres, Stepped};
 use dmd_sim::output::{Curve, plot_svg};
 use dmd_sim::potential::Potentials;
@@ -123,6 +123,7 @@ fn two_body(fault: f64, acceptance: Acceptance, segments: usize, seed: u64) -> [
             histogram_bins: 40,
             histogram_range: 10.0,
             seed,
+            measure: Measure::Dynamics,
         },
         false,
     );

@@ -645,8 +645,13 @@ fn print_summary(s: &Summary, out: &Path, terminal: Option<&Terminal>) {
         line(
             "hmc",
             &format!(
-                "{} chain, segments of {} {}: {} segments, acceptance {}",
+                "{} chain{}, segments of {} {}: {} segments, acceptance {}",
                 h.ensemble,
+                if h.measure == "stiff-bonds" {
+                    " (stiff-bond measure)"
+                } else {
+                    ""
+                },
                 plain(h.segment_time),
                 u.time,
                 count(h.segments),

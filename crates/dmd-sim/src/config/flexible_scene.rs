@@ -143,14 +143,6 @@ pub(crate) fn check_rest(scene: &Scene) -> Result<(), SceneError> {
              the impulsive constraint forces of the bonds (000 §IV.A)",
         ));
     }
-    if scene.hmc.is_some() {
-        return Err(SceneError::invalid(
-            "hmc",
-            "not available for semi-flexible molecules: the measure their constrained dynamics \
-             samples carries the metric factor det Z, which the acceptance does not account for \
-             yet, and RATTLE between events is not exactly reversible",
-        ));
-    }
     match (scene.init.orientations, scene.init.axis) {
         (Orientations::Random, None) => {}
         (Orientations::Random, Some(_)) => {

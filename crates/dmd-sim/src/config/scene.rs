@@ -201,6 +201,17 @@ pub enum AcceptKind {
     Always,
 }
 
+/// Which configuration measure a canonical HMC chain samples (`hmc.measure`).
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum MeasureKind {
+    /// The measure the dynamics samples (default): with bonds, it carries `√det Z`.
+    #[default]
+    Dynamics,
+    /// The limit of infinitely stiff bonds (semi-flexible molecules only).
+    StiffBonds,
+}
+
 /// `[hmc]`: event-driven segments inside a hybrid Monte Carlo chain (seed 000 §V).
 #[derive(Clone, Debug, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -228,6 +239,9 @@ pub struct HmcSpec {
     /// `metropolis` (default) or `always`.
     #[serde(default)]
     pub accept: AcceptKind,
+    /// `dynamics` (default) or `stiff-bonds`.
+    #[serde(default)]
+    pub measure: MeasureKind,
     /// Validation: fraction of pairs blind to their events in each segment (default 0).
     #[serde(default)]
     pub fault_fraction: f64,
@@ -1632,6 +1646,27 @@ impl Scene {
                 ));
             }
             positive("hmc.tolerance", h.tolerance)?;
+            if h.measure == MeasureKind::StiffBonds {
+                let why = if !self.has_bonds() {
+                    Some(
+                        "only semi-flexible molecules (species with `bonds`) have a measure that differs from the dynamics'",
+                    )
+                } else if h.ensemble != EnsembleKind::Canonical {
+                    Some(
+                        "the microcanonical chain accepts only ΔH = 0 and cannot reweight: use the canonical ensemble",
+                    )
+                } else if h.accept != AcceptKind::Metropolis {
+                    Some("`hmc.accept = \"always\"` accepts every segment and cannot reweight")
+                } else {
+                    None
+                };
+                if let Some(why) = why {
+                    return Err(SceneError::invalid(
+                        "hmc.measure",
+                        format!("`stiff-bonds`: {why}"),
+                    ));
+                }
+            }
             if !(0.0..1.0).contains(&h.fault_fraction) {
                 return Err(SceneError::invalid(
                     "hmc.fault_fraction",

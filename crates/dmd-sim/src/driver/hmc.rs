@@ -12,8 +12,9 @@
 //! 3. evaluate `H = K + U` at the end `x₁`, the potential **from the distances**
 //!    ([`Simulation::true_energy`]): a missed hard-core event leaves an overlap (`U = +∞`), a
 //!    missed step a pair level that disagrees with its distance (a finite `ΔH`);
-//! 4. **accept** `x₁` with probability `min(1, e^{−βΔH})` (canonical), or only if `ΔH = 0` to
-//!    within round-off (microcanonical). A rejection puts `x₀` back with every velocity
+//! 4. **accept** `x₁` with probability `min(1, e^{−βΔH})` (canonical; times
+//!    `√(det Z(x₀)/det Z(x₁))` for [`Measure::StiffBonds`]), or only if `ΔH = 0` to within
+//!    round-off (microcanonical). A rejection puts `x₀` back with every velocity
 //!    reversed (the generalised HMC rule that keeps detailed balance when the refresh is only
 //!    partial, as the exchange refresh is; for the canonical refresh the reversal is
 //!    irrelevant), and rolls back everything the segment did (time, counters, accumulators),
@@ -67,6 +68,19 @@ pub enum Acceptance {
     Always,
 }
 
+/// Which configuration measure a canonical chain samples.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Measure {
+    /// The measure the dynamics leaves invariant (the default): for molecules with distance
+    /// constraints it carries the metric factor `√det Z` (000 §II.A), as the constrained
+    /// dynamics itself samples.
+    #[default]
+    Dynamics,
+    /// The flat measure on the constraint surface, the limit of infinitely stiff bonds: the
+    /// acceptance divides out `√det Z` ([`PairModel::log_metric`]; Fixman's correction).
+    StiffBonds,
+}
+
 /// Settings of a chain.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct HmcSettings {
@@ -89,6 +103,9 @@ pub struct HmcSettings {
     pub histogram_range: f64,
     /// Seed of the chain's generator.
     pub seed: u64,
+    /// The configuration measure sampled (canonical chains).
+    #[serde(default)]
+    pub measure: Measure,
 }
 
 /// Why a segment ended as it did.
@@ -304,6 +321,12 @@ impl Chain {
         }
         let start = sim.save_state();
         let h0 = sim.true_energy();
+        let stiff = settings.measure == Measure::StiffBonds;
+        let g0 = if stiff {
+            sim.model().log_metric(sim.now())
+        } else {
+            0.0
+        };
         let events0 = sim.counters().events;
         sim.run(
             Stop::Time(settings.segment_time),
@@ -312,13 +335,18 @@ impl Chain {
         )?;
         sim.move_origin_here();
         let h1 = sim.true_energy();
+        let g1 = if stiff {
+            sim.model().log_metric(sim.now())
+        } else {
+            0.0
+        };
         let events = sim.counters().events - events0;
         let dh = h1.total() - h0.total();
         let beta = 1.0 / settings.temperature;
         let scale = (h0.kinetic + h0.potential.abs()).max(f64::MIN_POSITIVE);
         let round_off = dh.abs() <= settings.tolerance * scale;
         let u: f64 = self.rng.random();
-        let outcome = if dh.is_nan() {
+        let outcome = if dh.is_nan() || (g0 - g1).is_nan() {
             Outcome::NonFinite
         } else if settings.acceptance == Acceptance::Always {
             Outcome::Accepted
@@ -326,7 +354,12 @@ impl Chain {
             Outcome::Overlap
         } else {
             let accept = match settings.ensemble {
-                Ensemble::Canonical => dh <= 0.0 || u < (-beta * dh).exp(),
+                Ensemble::Canonical => {
+                    // The target's density ratio: e^{−βΔH}, times √(det Z₀/det Z₁) for the
+                    // stiff-bond measure (the dynamics preserves the one with √det Z).
+                    let log_ratio = -beta * dh + (g0 - g1);
+                    log_ratio >= 0.0 || u < log_ratio.exp()
+                }
                 Ensemble::Microcanonical => round_off,
             };
             if accept {
@@ -434,6 +467,11 @@ impl Chain {
                 Acceptance::Always => "always",
             }
             .to_owned(),
+            measure: match self.settings.measure {
+                Measure::Dynamics => "dynamics",
+                Measure::StiffBonds => "stiff-bonds",
+            }
+            .to_owned(),
             segment_time: self.settings.segment_time,
             temperature: self.settings.temperature,
             segments: s.segments,
@@ -533,6 +571,9 @@ pub struct HmcSummary {
     pub ensemble: String,
     /// `metropolis` or `always`.
     pub acceptance: String,
+    /// `dynamics` or `stiff-bonds`: the configuration measure sampled.
+    #[serde(default = "dynamics")]
+    pub measure: String,
     /// `τ`.
     pub segment_time: f64,
     /// `T` (canonical refresh and `β`).
@@ -567,6 +608,10 @@ pub struct HmcSummary {
     pub kinetic_energy_per_body: BlockEstimate,
     /// Chain states with overlapping hard cores (only when every segment is accepted).
     pub overlapping_states: u64,
+}
+
+fn dynamics() -> String {
+    "dynamics".to_owned()
 }
 
 #[cfg(test)]

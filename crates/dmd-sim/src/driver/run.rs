@@ -27,7 +27,7 @@ use crate::config::kinds::{Kind, TerracedPlan, Visit};
 use crate::config::plan::Plan;
 use crate::config::rods::Bodies;
 use crate::config::scene::{
-    AcceptKind, EnsembleKind, Orientations, Positions, QueueKind, Scene, SceneError,
+    AcceptKind, EnsembleKind, MeasureKind, Orientations, Positions, QueueKind, Scene, SceneError,
     ThermostatKind, ThermostatPhase, Velocities,
 };
 use crate::config::units::Units;
@@ -35,7 +35,7 @@ use crate::driver::checkpoint::{
     Checkpoint, CheckpointError, Every, Left, ObserverState, Problem, RunRecord, Saver,
     SceneSource, Stage,
 };
-use crate::driver::hmc::{Acceptance, Chain, Ensemble, HmcSettings, HmcSummary};
+use crate::driver::hmc::{Acceptance, Chain, Ensemble, HmcSettings, HmcSummary, Measure};
 pub use crate::driver::reporting::{
     ObservableTable, PhaseEnd, Quiet, Reporter, RunError, RunPlan, thread_cpu_seconds,
 };
@@ -2206,6 +2206,10 @@ fn hmc_settings(scene: &Scene) -> HmcSettings {
         histogram_bins: h.histogram_bins as usize,
         histogram_range: h.histogram_range,
         seed: scene.seed,
+        measure: match h.measure {
+            MeasureKind::Dynamics => Measure::Dynamics,
+            MeasureKind::StiffBonds => Measure::StiffBonds,
+        },
     }
 }
 

@@ -287,6 +287,15 @@ pub trait PairModel {
         None
     }
 
+    /// `ln` of the density, at time `now`, of the configuration measure that the model's free
+    /// motion leaves invariant relative to the flat measure of its coordinates, up to a
+    /// constant: `Σ ½ ln det Z` over molecules whose distance constraints leave internal
+    /// freedom (000 §II.A), 0 for rigid bodies, whose measure is flat. HMC divides it out of
+    /// the acceptance when asked to sample the stiff-spring (flexible) ensemble.
+    fn log_metric(&self, _now: f64) -> f64 {
+        0.0
+    }
+
     /// Named counters of the model's own work (root searches, constraint integration): the
     /// loop and the driver read them by name, so a model adds counters without a new hook.
     fn report(&self) -> Report {

@@ -68,11 +68,14 @@
 //! tangent of the bonds (mass-orthogonally), which is the Maxwell–Boltzmann distribution of the
 //! constrained internal motion.
 //!
+//! **Measure.** The constrained dynamics (the paper's) leaves `e^{−βH}` invariant on the
+//! constraint surface with the metric factor `√det Z` (000 §II.A): configurations are not
+//! uniform on the surface of fixed bond lengths. [`half_log_det_z`] gives the factor,
+//! [`PairModel::log_metric`] sums it over molecules, and HMC divides it out when asked for the
+//! stiff-bond ensemble instead.
+//!
 //! **Not modelled.** Atoms of the same molecule do not interact (no intramolecular excluded
-//! volume or wells: the loop has no events of one body with itself), and the constraint
-//! system's phase-space metric `det Z` (000 §II.A) is not corrected for: the dynamics is the
-//! constrained Lagrangian one, as the paper's. Checkpoints and HMC rollbacks cannot restore the
-//! internal states and site-pair levels (refused with an error, as for `sites`).
+//! volume or wells: the loop has no events of one body with itself).
 
 pub mod rattle;
 
@@ -346,35 +349,48 @@ impl FlexibleType {
     }
 }
 
-/// The first bond whose Cholesky pivot of `Z = Σ_k w_k ∇_kσ_α·∇_kσ_β` (000 §II.A) is below
-/// [`BOND_PIVOT`] of its diagonal, if any.
-fn dependent_bond(masses: &[f64], bonds: &[Bond], q: &[DVec3]) -> Option<usize> {
+/// The bonds' metric matrix `Z_αβ = Σ_k (1/m_k) ∇_kσ_α·∇_kσ_β` (000 §II.A) at atom positions
+/// `q`, row-major, for the constraint functions `σ_α` whose gradient at bond `α`'s first atom
+/// is the bond vector `r_α` divided by `norm(r_α)` (the second atom's is its negative).
+fn bond_metric(
+    masses: &[f64],
+    bonds: &[Bond],
+    q: &[DVec3],
+    norm: impl Fn(DVec3) -> f64,
+) -> Vec<f64> {
     let nb = bonds.len();
+    let r: Vec<DVec3> = bonds.iter().map(|b| q[b.a] - q[b.b]).collect();
+    let n: Vec<f64> = r.iter().map(|&x| norm(x)).collect();
     let mut z = vec![0.0; nb * nb];
     for (x, bx) in bonds.iter().enumerate() {
-        let rx = q[bx.a] - q[bx.b];
         for (y, by) in bonds.iter().enumerate() {
-            let ry = q[by.a] - q[by.b];
-            // ∇_a σ = r, ∇_b σ = −r: the atoms the two bonds share contribute.
+            // Only the atoms the two bonds share contribute.
             let mut s = 0.0;
             for (atom, sx) in [(bx.a, 1.0), (bx.b, -1.0)] {
                 for (other, sy) in [(by.a, 1.0), (by.b, -1.0)] {
                     if atom == other {
-                        s += sx * sy * rx.dot(ry) / masses[atom];
+                        s += sx * sy / masses[atom];
                     }
                 }
             }
-            z[x * nb + y] = s;
+            z[x * nb + y] = s * r[x].dot(r[y]) / (n[x] * n[y]);
         }
     }
+    z
+}
+
+/// Cholesky factorisation of the symmetric `nb × nb` matrix `z` in place (lower triangle).
+/// The first row whose pivot is below `floor` times its diagonal (or not a number) is the
+/// error.
+fn cholesky(z: &mut [f64], nb: usize, floor: f64) -> Result<(), usize> {
     for k in 0..nb {
         let diag = z[k * nb + k];
         let mut p = diag;
         for m in 0..k {
             p -= z[k * nb + m] * z[k * nb + m];
         }
-        if p.is_nan() || p <= BOND_PIVOT * diag {
-            return Some(k);
+        if p.is_nan() || p <= floor * diag {
+            return Err(k);
         }
         let p = p.sqrt();
         z[k * nb + k] = p;
@@ -386,7 +402,29 @@ fn dependent_bond(masses: &[f64], bonds: &[Bond], q: &[DVec3]) -> Option<usize> 
             z[r * nb + k] = s / p;
         }
     }
-    None
+    Ok(())
+}
+
+/// The first bond whose Cholesky pivot of `Z` is below [`BOND_PIVOT`] of its diagonal, if
+/// any (gradients `r_α` unnormalised: the test is relative, so their scale does not matter).
+fn dependent_bond(masses: &[f64], bonds: &[Bond], q: &[DVec3]) -> Option<usize> {
+    let mut z = bond_metric(masses, bonds, q, |_| 1.0);
+    cholesky(&mut z, bonds.len(), BOND_PIVOT).err()
+}
+
+/// `½ ln det Z` of one molecule at atom positions `q`, for unit constraint gradients
+/// (`σ_α = |r_α| − b_α`): the density of the measure that the constrained dynamics leaves
+/// invariant on the bond surface, relative to the flat one `Π_α δ(|r_α| − b_α) d³q` of the
+/// stiff-spring limit (000 §II.A; Fixman). `+∞` never occurs for bonds that passed
+/// [`FlexibleType::new`]; a configuration where they become dependent gives `−∞`.
+pub fn half_log_det_z(masses: &[f64], bonds: &[Bond], q: &[DVec3]) -> f64 {
+    let nb = bonds.len();
+    let mut z = bond_metric(masses, bonds, q, DVec3::length);
+    match cholesky(&mut z, nb, 0.0) {
+        // det Z = Π L_kk², so ½ ln det Z = Σ ln L_kk.
+        Ok(()) => (0..nb).map(|k| z[k * nb + k].ln()).sum(),
+        Err(_) => f64::NEG_INFINITY,
+    }
 }
 
 /// The RATTLE propagation of the internal motion.
@@ -1561,6 +1599,18 @@ impl PairModel for Flexible {
         r
     }
 
+    fn log_metric(&self, now: f64) -> f64 {
+        (0..self.trajectories.len())
+            .map(|i| match self.internal_state(i as u32, now) {
+                Ok((q, _)) => {
+                    let ty = &self.types[self.body_type[i] as usize];
+                    half_log_det_z(&ty.masses, &ty.bonds, &q)
+                }
+                Err(_) => f64::NAN,
+            })
+            .sum()
+    }
+
     fn bond_error_at(&self, now: f64) -> Option<f64> {
         Some(self.bond_error(now))
     }
@@ -1623,6 +1673,41 @@ mod tests {
             mass,
             species: 0,
         }
+    }
+
+    /// A bent trimer of masses `m1, m2, m3` and bonds `b1, b2` at bend angle `theta`.
+    fn trimer(theta: f64, m: [f64; 3], b: [f64; 2]) -> [SiteAtom; 3] {
+        [
+            atom(b[0], 0.0, 0.0, m[0]),
+            atom(0.0, 0.0, 0.0, m[1]),
+            atom(b[1] * theta.cos(), b[1] * theta.sin(), 0.0, m[2]),
+        ]
+    }
+
+    #[test]
+    fn the_metric_of_a_trimer_is_fixmans() {
+        // Unit gradients: Z = [[1/m1 + 1/m2, −cos θ/m2], [−cos θ/m2, 1/m2 + 1/m3]], whatever
+        // the bond lengths, the orientation and the position.
+        let bonds = [Bond::new(0, 1), Bond::new(1, 2)];
+        let m = [10.0, 1.0, 3.0];
+        let turn = DQuat::from_axis_angle(DVec3::new(1.0, 2.0, -0.5).normalize(), 0.7);
+        for theta in [0.05, 0.6, 1.5, 2.2, 3.1] {
+            let q: Vec<DVec3> = trimer(theta, m, [0.8, 1.7])
+                .iter()
+                .map(|a| turn * a.position + DVec3::new(3.0, -1.0, 2.0))
+                .collect();
+            let det = (1.0 / m[0] + 1.0 / m[1]) * (1.0 / m[1] + 1.0 / m[2])
+                - (theta.cos() / m[1]).powi(2);
+            let got = half_log_det_z(&m, &bonds, &q);
+            assert!(
+                (got - 0.5 * det.ln()).abs() < 1e-12,
+                "θ = {theta}: {got} vs {det}"
+            );
+        }
+        // Collinear and all bonded: dependent, the measure vanishes (to round-off).
+        let line = trimer(std::f64::consts::PI, [1.0; 3], [1.0, 1.0]).map(|a| a.position);
+        let all = [Bond::new(0, 1), Bond::new(1, 2), Bond::new(0, 2)];
+        assert!(half_log_det_z(&[1.0; 3], &all, &line) < -10.0);
     }
 
     #[test]

@@ -9,7 +9,7 @@
 //! the segments).
 
 use collide::Particle;
-use dmd_sim::hmc::{Acceptance, Chain, Ensemble, HmcSettings, Outcome};
+use dmd_sim::hmc::{Acceptance, Chain, Ensemble, HmcSettings, Measure, Outcome};
 use dmd_sim::model::{PairModel, Stepped};
 use dmd_sim::potential::Potentials;
 use dmd_sim::simulation::{LoopSettings, Simulation};
@@ -58,6 +58,7 @@ fn settings(ensemble: Ensemble, acceptance: Acceptance, seed: u64) -> HmcSetting
         histogram_bins: 40,
         histogram_range: 10.0,
         seed,
+        measure: Measure::Dynamics,
     }
 }
 
