@@ -414,15 +414,26 @@ impl<P: TerracedPotential> PairTerraces<P> {
     /// Stored value of terrace `k` (0 for the zero terrace, which is not stored).
     #[inline(always)]
     fn stored(&self, k: u16) -> u16 {
-        ((u32::from(k) + u32::from(self.terraces) - u32::from(self.zero))
-            % u32::from(self.terraces)) as u16
+        wrap(
+            u32::from(k) + u32::from(self.terraces) - u32::from(self.zero),
+            self.terraces,
+        )
     }
 
     /// Terrace of stored value `v`.
     #[inline(always)]
     fn terrace(&self, v: u16) -> u16 {
-        ((u32::from(v) + u32::from(self.zero)) % u32::from(self.terraces)) as u16
+        wrap(u32::from(v) + u32::from(self.zero), self.terraces)
     }
+}
+
+/// `x mod n` for `x < 2n` (a terrace or stored value shifted by less than `n`): one compare
+/// instead of an integer division, which sat on every prediction's critical path.
+#[inline(always)]
+fn wrap(x: u32, n: u16) -> u16 {
+    let n = u32::from(n);
+    debug_assert!(x < 2 * n);
+    (if x >= n { x - n } else { x }) as u16
 }
 
 /// What a virtual event resumes.
