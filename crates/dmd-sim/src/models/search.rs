@@ -47,8 +47,9 @@ pub struct SearchSettings {
     /// Certified prediction (`potential::certify`): before each search call, jump the
     /// stretch of free flight in which a Taylor model of the potential's effective coordinate
     /// proves that `U` stays inside its band, up to this far ahead; a pair still safe there
-    /// gets a virtual event at that time, having evaluated nothing. 0: off (and for potentials
-    /// without a Taylor model, whatever its value).
+    /// gets a virtual event at that time, having evaluated nothing, and a pair the models stop
+    /// short of it gets one at the end of the proven stretch, where its root search starts.
+    /// 0: off (and for potentials without a Taylor model, whatever its value).
     pub horizon: f64,
 }
 

@@ -29,7 +29,11 @@
 //! sample ([`SearchSettings::max_change`]). A pair not yet within reach gets a virtual event at
 //! the moment it enters (nothing is evaluated before), and a search that reaches the end of its
 //! window gets one at its last sample, from which it resumes if neither body has changed by
-//! then.
+//! then. With certified prediction ([`SearchSettings::horizon`]) each call first jumps the
+//! stretch the potential's Taylor model proves free of crossings and ends with a virtual event
+//! there: certified again from there if the jump reached the horizon, the root search started
+//! there if it stopped short (a crossing may be near). Many predictions are thrown away before
+//! their event (either body changes first), so a deferred search is often a search saved.
 //!
 //! **Impulses.** At the event the force and torques of the smooth potential give the direction
 //! of the impulse and `collide::terrace` (003 Eq. 21) its size; the pair crosses to the next
@@ -414,15 +418,26 @@ impl<P: TerracedPotential> PairTerraces<P> {
     /// Stored value of terrace `k` (0 for the zero terrace, which is not stored).
     #[inline(always)]
     fn stored(&self, k: u16) -> u16 {
-        ((u32::from(k) + u32::from(self.terraces) - u32::from(self.zero))
-            % u32::from(self.terraces)) as u16
+        wrap(
+            u32::from(k) + u32::from(self.terraces) - u32::from(self.zero),
+            self.terraces,
+        )
     }
 
     /// Terrace of stored value `v`.
     #[inline(always)]
     fn terrace(&self, v: u16) -> u16 {
-        ((u32::from(v) + u32::from(self.zero)) % u32::from(self.terraces)) as u16
+        wrap(u32::from(v) + u32::from(self.zero), self.terraces)
     }
+}
+
+/// `x mod n` for `x < 2n` (a terrace or stored value shifted by less than `n`): one compare
+/// instead of an integer division, which sat on every prediction's critical path.
+#[inline(always)]
+fn wrap(x: u32, n: u16) -> u16 {
+    let n = u32::from(n);
+    debug_assert!(x < 2 * n);
+    (if x >= n { x - n } else { x }) as u16
 }
 
 /// What a virtual event resumes.
@@ -432,6 +447,9 @@ enum Pending {
     Start { at: f64, end: f64 },
     /// Continue a suspended search; the speed `U̇` at its last sample.
     Resume(SearchState, f64),
+    /// Start the root search at `at` without certified jumps: the Taylor models already
+    /// stopped there (a crossing may be near), bracket end `end`.
+    Search { at: f64, end: f64 },
 }
 
 /// Certified prediction from `t` towards `limit`: Taylor models of the potential's effective
@@ -755,11 +773,15 @@ impl<P: TerracedPotential> Terraced<P> {
             }
         };
         // Certified prediction: jump the stretch the Taylor model proves free of crossings
-        // (module documentation); a pair still safe at the horizon gets a virtual event there.
-        let mut from = from;
-        if self.settings.horizon > 0.0 {
+        // (module documentation) and schedule a virtual event at its end.
+        let certify = self.settings.horizon > 0.0 && !matches!(from, Pending::Search { .. });
+        let from = match from {
+            Pending::Search { at, end } => Pending::Start { at, end },
+            other => other,
+        };
+        if certify {
             let (t_start, end) = match from {
-                Pending::Start { at, end } => (at.max(now), end),
+                Pending::Start { at, end } | Pending::Search { at, end } => (at.max(now), end),
                 Pending::Resume(s, _) => (s.time(), s.end()),
             };
             let limit = (t_start + self.settings.horizon).min(end);
@@ -799,21 +821,33 @@ impl<P: TerracedPotential> Terraced<P> {
                 if t >= end {
                     return None;
                 }
-                if t >= limit {
-                    self.pending.set(i, j, t, Pending::Start { at: t, end });
-                    return Some((t - now, Kind::Virtual));
-                }
-                from = Pending::Start { at: t, end };
+                // Safe up to the horizon: certify again from there. Stopped short of it (a
+                // crossing may be near): the root search waits for a virtual event at the end
+                // of the proven stretch, so a prediction thrown away before then (either body
+                // changes first, the fate of many) costs no search and no root refinement.
+                let next = if t >= limit {
+                    Pending::Start { at: t, end }
+                } else {
+                    Pending::Search { at: t, end }
+                };
+                // Saved under the event's time as the loop computes it (`now + dt`, which
+                // need not equal `t` in binary64): under `t` a virtual event could miss its
+                // saved state, and the pair would go unpredicted until one of the two changed.
+                let dt = t - now;
+                self.pending.set(i, j, now + dt, next);
+                return Some((dt, Kind::Virtual));
             }
         }
         let (t0, end, speed) = match from {
-            Pending::Start { at, end } => (at.max(now), end, f64::NAN),
+            Pending::Start { at, end } | Pending::Search { at, end } => {
+                (at.max(now), end, f64::NAN)
+            }
             Pending::Resume(s, udot) => (s.time(), s.end(), udot.abs()),
         };
         // A start evaluates its first sample here: its U checks the stored terrace and its U̇
         // limits the steps. The search then finds that sample in the cache.
         let first = match from {
-            Pending::Start { .. } => Some(pair_at(t0)),
+            Pending::Start { .. } | Pending::Search { .. } => Some(pair_at(t0)),
             Pending::Resume(..) => None,
         };
         let speed = first.map_or(speed, |(_, du)| du.abs());
@@ -844,7 +878,7 @@ impl<P: TerracedPotential> Terraced<P> {
             window
         };
         let result = match (self.settings.method, from) {
-            (SearchMethod::Adaptive, Pending::Start { .. }) => self
+            (SearchMethod::Adaptive, Pending::Start { .. } | Pending::Search { .. }) => self
                 .adaptive
                 .with_max_step(step)
                 .and_then(|m| m.start(&mut indicator, t0, end, Crossing::Falling, window)),
@@ -852,8 +886,10 @@ impl<P: TerracedPotential> Terraced<P> {
                 .adaptive
                 .with_max_step(step)
                 .and_then(|m| m.resume(&mut indicator, s, window)),
-            (SearchMethod::Grid { threshold }, Pending::Start { .. }) => Grid::new(step, threshold)
-                .and_then(|m| m.start(&mut indicator, t0, end, Crossing::Falling, window)),
+            (SearchMethod::Grid { threshold }, Pending::Start { .. } | Pending::Search { .. }) => {
+                Grid::new(step, threshold)
+                    .and_then(|m| m.start(&mut indicator, t0, end, Crossing::Falling, window))
+            }
             (SearchMethod::Grid { threshold }, Pending::Resume(s, _)) => {
                 Grid::new(step, threshold).and_then(|m| m.resume(&mut indicator, s, window))
             }
