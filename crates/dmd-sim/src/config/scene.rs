@@ -17,6 +17,7 @@ use std::path::PathBuf;
 
 use serde::{Deserialize, Deserializer};
 
+use crate::analysis::output::given;
 use crate::analysis::output::Drawing;
 
 /// The scene format this version of `dmd` reads.
@@ -1035,9 +1036,15 @@ fn count<'de, D: Deserializer<'de>>(d: D) -> Result<u64, D::Error> {
         fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<u64, E> {
             if v >= 0.0 && v.fract() == 0.0 && v < 1.8e19 {
                 Ok(v as u64)
+            } else if v >= 1.8e19 && v.is_finite() {
+                Err(E::custom(format!(
+                    "expected a whole number below 1.8e19, got {}",
+                    given(v)
+                )))
             } else {
                 Err(E::custom(format!(
-                    "expected a non-negative whole number, got {v}"
+                    "expected a non-negative whole number, got {}",
+                    given(v)
                 )))
             }
         }
@@ -1637,7 +1644,7 @@ impl Scene {
                     "hmc.fault_fraction",
                     format!(
                         "must be at least 0 and less than 1, got {}",
-                        h.fault_fraction
+                        given(h.fault_fraction)
                     ),
                 ));
             }
@@ -1900,7 +1907,7 @@ impl Scene {
                 if x.is_nan() || x <= 0.0 {
                     return Err(SceneError::invalid(
                         "search.max_change",
-                        format!("must be a positive fraction or inf, got {x}"),
+                        format!("must be a positive fraction or inf, got {}", given(x)),
                     ));
                 }
                 if sr.method != SearchMethodSpec::Adaptive {
@@ -1975,7 +1982,7 @@ fn check_terraces(k: usize, p: &PotentialSpec, t: &TerraceSpec) -> Result<(), Sc
         if let Some(x) = levels.iter().find(|x| !x.is_finite()) {
             return Err(SceneError::invalid(
                 key("levels"),
-                format!("levels must be finite energies, got {x}"),
+                format!("levels must be finite energies, got {}", given(*x)),
             ));
         }
         if t.placement != PlacementSpec::EqualEnergy {
@@ -2014,7 +2021,10 @@ fn check_terraces(k: usize, p: &PotentialSpec, t: &TerraceSpec) -> Result<(), Sc
         if !(o.is_finite() && o < 0.0) {
             return Err(SceneError::invalid(
                 key("outermost"),
-                format!("must be a negative energy (the outermost level below zero), got {o}"),
+                format!(
+                    "must be a negative energy (the outermost level below zero), got {}",
+                    given(o)
+                ),
             ));
         }
         if t.levels.is_some() {
@@ -2060,7 +2070,7 @@ pub(crate) fn check_search_keys(sr: &SearchSpec, threshold: &str) -> Result<(), 
     {
         return Err(SceneError::invalid(
             "search.window",
-            format!("must be a positive time or inf, got {x}"),
+            format!("must be a positive time or inf, got {}", given(x)),
         ));
     }
     if let Some(j) = sr.jitter
@@ -2068,7 +2078,7 @@ pub(crate) fn check_search_keys(sr: &SearchSpec, threshold: &str) -> Result<(), 
     {
         return Err(SceneError::invalid(
             "search.jitter",
-            format!("must be at least 0 and below 0.5, got {j}"),
+            format!("must be at least 0 and below 0.5, got {}", given(j)),
         ));
     }
     if let Some(x) = sr.grid_threshold {
@@ -2081,7 +2091,7 @@ pub(crate) fn check_search_keys(sr: &SearchSpec, threshold: &str) -> Result<(), 
         if x.is_nan() || x < 0.0 {
             return Err(SceneError::invalid(
                 "search.grid_threshold",
-                format!("must be {threshold}, got {x}"),
+                format!("must be {threshold}, got {}", given(x)),
             ));
         }
     }
@@ -2097,7 +2107,7 @@ pub(crate) fn positive(key: &str, x: f64) -> Result<(), SceneError> {
     } else {
         Err(SceneError::invalid(
             key,
-            format!("must be a positive finite number, got {x}"),
+            format!("must be a positive finite number, got {}", given(x)),
         ))
     }
 }
@@ -2108,7 +2118,7 @@ pub(crate) fn non_negative(key: &str, x: f64) -> Result<(), SceneError> {
     } else {
         Err(SceneError::invalid(
             key,
-            format!("must be a finite number ≥ 0, got {x}"),
+            format!("must be a finite number ≥ 0, got {}", given(x)),
         ))
     }
 }
@@ -2132,13 +2142,16 @@ pub(crate) fn check_steps_at(key: &str, steps: &[[f64; 2]]) -> Result<(), SceneE
         if !(r.is_finite() && r > 0.0) {
             return Err(SceneError::invalid(
                 here,
-                format!("the radius must be a positive finite number, got {r}"),
+                format!("the radius must be a positive finite number, got {}", given(r)),
             ));
         }
         if dv.is_nan() || dv == f64::NEG_INFINITY {
             return Err(SceneError::invalid(
                 here,
-                format!("the energy step must be a number or inf (a hard core), got {dv}"),
+                format!(
+                    "the energy step must be a number or inf (a hard core), got {}",
+                    given(dv)
+                ),
             ));
         }
         if dv == 0.0 {
