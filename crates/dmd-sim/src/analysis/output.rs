@@ -16,11 +16,6 @@ use crate::engine::simulation::View;
 /// bytes in memory).
 pub const SERIES_ROW_BYTES: f64 = 150.0;
 
-/// Bytes of one sample of the per-sample series behind the summary's error bars, held in
-/// memory for the whole production (six numbers of 8 bytes, and as much again while the
-/// vector doubles its capacity).
-pub const SAMPLE_ROW_BYTES: f64 = 96.0;
-
 /// Bytes of one lag of the correlation buffers (MSD, VACF, two orientational ACFs, count).
 pub const LAG_BYTES: f64 = 40.0;
 

@@ -1982,7 +1982,7 @@ fn check_terraces(k: usize, p: &PotentialSpec, t: &TerraceSpec) -> Result<(), Sc
         if let Some(x) = levels.iter().find(|x| !x.is_finite()) {
             return Err(SceneError::invalid(
                 key("levels"),
-                format!("levels must be finite energies, got {}", given(*x)),
+                format!("levels must be finite energies, got {}", crate::analysis::output::given(*x)),
             ));
         }
         if t.placement != PlacementSpec::EqualEnergy {
@@ -2023,7 +2023,7 @@ fn check_terraces(k: usize, p: &PotentialSpec, t: &TerraceSpec) -> Result<(), Sc
                 key("outermost"),
                 format!(
                     "must be a negative energy (the outermost level below zero), got {}",
-                    given(o)
+                    crate::analysis::output::given(o)
                 ),
             ));
         }
