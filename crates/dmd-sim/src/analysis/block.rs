@@ -148,7 +148,11 @@ impl Blocks {
     /// What does not fit.
     pub fn check(&self) -> Result<(), String> {
         for (k, l) in self.levels.iter().enumerate() {
-            let below = if k == 0 { None } else { Some(self.levels[k - 1].count / 2) };
+            let below = if k == 0 {
+                None
+            } else {
+                Some(self.levels[k - 1].count / 2)
+            };
             // A level with a pair done has handed it on: the top one holds its first value only.
             let top = k + 1 == self.levels.len();
             let ok = below.is_none_or(|c| c == l.count)
@@ -342,7 +346,12 @@ mod tests {
         assert_eq!(b.len(), 1_000_000);
         assert_eq!(levels_1e3, 10);
         assert_eq!(b.levels.len(), 20);
-        assert!(b.bytes() <= 2 * bytes_1e3 + 1024, "{} {}", b.bytes(), bytes_1e3);
+        assert!(
+            b.bytes() <= 2 * bytes_1e3 + 1024,
+            "{} {}",
+            b.bytes(),
+            bytes_1e3
+        );
         assert!(b.bytes() < 2048, "{} bytes", b.bytes());
         assert!(b.check().is_ok());
         // The checkpoint's form of it is as small.

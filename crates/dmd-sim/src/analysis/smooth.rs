@@ -405,8 +405,7 @@ impl Samples {
                 .then(|| self.rotational_temperature.estimate()),
             potential_per_body: self.potential_per_body.estimate(),
             pressure: self.pressure.estimate(),
-            potential_smooth_per_body: smooth
-                .then(|| self.potential_smooth_per_body.estimate()),
+            potential_smooth_per_body: smooth.then(|| self.potential_smooth_per_body.estimate()),
             pressure_smooth: smooth.then(|| self.pressure_smooth.estimate()),
         }
     }

@@ -18,8 +18,7 @@
 //!   reach is known).
 
 pub use crate::analysis::output::{
-    GSD_FRAME_BYTES, GSD_PARTICLE_BYTES, LAG_BYTES, SERIES_ROW_BYTES, short,
-    trajectory_line_bytes,
+    GSD_FRAME_BYTES, GSD_PARTICLE_BYTES, LAG_BYTES, SERIES_ROW_BYTES, short, trajectory_line_bytes,
 };
 pub use crate::config::scene::{DEFAULT_MAX_BYTES, MAX_STEP_ENERGY};
 use crate::config::scene::{Scene, SceneError};

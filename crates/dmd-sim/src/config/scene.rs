@@ -17,8 +17,8 @@ use std::path::PathBuf;
 
 use serde::{Deserialize, Deserializer};
 
-use crate::analysis::output::given;
 use crate::analysis::output::Drawing;
+use crate::analysis::output::given;
 
 /// The scene format this version of `dmd` reads.
 pub const FORMAT_VERSION: u32 = 1;
@@ -1982,7 +1982,10 @@ fn check_terraces(k: usize, p: &PotentialSpec, t: &TerraceSpec) -> Result<(), Sc
         if let Some(x) = levels.iter().find(|x| !x.is_finite()) {
             return Err(SceneError::invalid(
                 key("levels"),
-                format!("levels must be finite energies, got {}", crate::analysis::output::given(*x)),
+                format!(
+                    "levels must be finite energies, got {}",
+                    crate::analysis::output::given(*x)
+                ),
             ));
         }
         if t.placement != PlacementSpec::EqualEnergy {
@@ -2142,7 +2145,10 @@ pub(crate) fn check_steps_at(key: &str, steps: &[[f64; 2]]) -> Result<(), SceneE
         if !(r.is_finite() && r > 0.0) {
             return Err(SceneError::invalid(
                 here,
-                format!("the radius must be a positive finite number, got {}", given(r)),
+                format!(
+                    "the radius must be a positive finite number, got {}",
+                    given(r)
+                ),
             ));
         }
         if dv.is_nan() || dv == f64::NEG_INFINITY {

@@ -219,8 +219,7 @@ fn samples_behind_the_error_bars_need_no_output_limit() {
     let o = dmd(&["run", "--quiet"], &[("", &s), ("--out", &out)]);
     assert!(o.status.success(), "{}", stderr(&o));
     let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
-            .unwrap();
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     let samples = summary["events_by_kind"]["samples"].as_u64().unwrap();
     assert!(samples > 1000, "{samples} samples");
     assert!(summary["pressure_error"].as_f64().unwrap() > 0.0);
