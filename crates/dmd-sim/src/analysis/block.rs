@@ -135,7 +135,7 @@ impl Blocks {
         self.len() == 0
     }
 
-    /// Bytes it takes: one [`Level`] per doubling of the values pushed, `O(log n)`.
+    /// Bytes it takes: one level per doubling of the values pushed, `O(log n)`.
     pub fn bytes(&self) -> usize {
         std::mem::size_of::<Self>() + self.levels.capacity() * std::mem::size_of::<Level>()
     }
