@@ -808,7 +808,7 @@ pub struct Observers {
     pub trajectory: Option<crate::analysis::output::Trajectory>,
     /// GSD trajectory frames, frame stream 1.
     pub gsd: Option<crate::analysis::output::GsdTrajectory>,
-    /// The per-sample series behind the summary's error bars.
+    /// The online accumulators of the per-sample quantities behind the summary's error bars.
     pub samples: Option<crate::analysis::smooth::Samples>,
     /// The smooth potential (terraced rods and Gay–Berne), evaluated at every
     /// `smooth_every`-th sample.

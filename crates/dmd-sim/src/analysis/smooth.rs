@@ -1,5 +1,5 @@
-//! Estimators of the continuous model along a trajectory, and the per-sample series the
-//! summary's error bars come from.
+//! Estimators of the continuous model along a trajectory, and the online accumulators of the
+//! per-sample quantities the summary's error bars come from.
 //!
 //! A terraced run samples the terraced potential `V` (003 Eq. 7), whose averages differ from
 //! the smooth potential's by the terrace width. At every sample the [`Estimator`] evaluates the

@@ -220,7 +220,7 @@ pub struct ObserverState {
     pub trajectory: Option<(u64, u64)>,
     /// The GSD trajectory's frames.
     pub gsd: Option<u64>,
-    /// The per-sample series of the summary's error bars and smooth estimators.
+    /// The online accumulators of the summary's error bars and smooth estimators.
     pub samples: Option<crate::analysis::smooth::Samples>,
 }
 
