@@ -5,11 +5,13 @@
 //! For each case (hard spheres and the paper's rods, with every output they have streamed as
 //! the run goes) the production length is first calibrated to about `--cpu` seconds of CPU
 //! (30 by default, 2 with `--quick`) from a short run; the run is then made once without a
-//! stop, and `--trials` times (4; 2 with `--quick`) it is started, sent SIGTERM at a moment
-//! drawn uniformly over 5–85 % of the straight run's production (from the moment production
-//! starts writing its series), and resumed; every second trial stops its resumed run again
-//! at another drawn moment before resuming it to the end. The moments come from the clock, so
-//! they differ between runs of this check; they are printed with the results.
+//! stop, and `--trials` times (4; 2 with `--quick`) it is started and sent SIGTERM once it has
+//! used a CPU time drawn uniformly over 5–85 % of the straight run's production CPU time (so
+//! that the moment is a point of the run whatever the load of the machine, which changes its
+//! wall-clock time), and resumed; every second trial stops its resumed run again at a CPU
+//! time drawn over 5–50 % of what was left, before resuming it to the end. The moments come
+//! from the clock, so they differ between runs of this check; they are printed with the
+//! results.
 //!
 //! It runs the `dmd` command that `cargo build --release -p dmd-sim --features validation`
 //! builds next to this example (it builds it first). Prints a Markdown report on stdout and
@@ -21,7 +23,7 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode, Stdio};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 /// One scene of the check.
 struct Case {
@@ -165,9 +167,10 @@ fn main() -> ExitCode {
     let _ = writeln!(
         report,
         "Each case's production is calibrated to about {} s of CPU; the run is made once \
-         without a stop and {} times stopped by SIGTERM at a moment drawn uniformly over \
-         5–85 % of the straight run's production (every second trial stopped again in its \
-         resumed run, at a moment over 5–50 %), then resumed with `dmd resume` to its end. \
+         without a stop and {} times stopped by SIGTERM once it has used a CPU time drawn \
+         uniformly over 5–85 % of the straight run's production CPU time (every second trial \
+         stopped again in its resumed run, over 5–50 % of what was left), then resumed with \
+         `dmd resume` to its end. \
          Every file of the output folder and the summary (timings excepted) are compared \
          with the straight run's byte for byte. Moments drawn from seed {seed:#x}.\n",
         short(o.cpu),
@@ -290,42 +293,63 @@ fn run(dmd: &Path, args: &[&std::ffi::OsStr]) -> Result<(Option<i32>, String), S
     ))
 }
 
-/// Runs `dmd ARGS`, waits until `ready` exists and `delay` more, and sends SIGTERM; its exit
-/// status and standard error.
+/// CPU seconds (user and system) the process `pid` has used, from `/proc/PID/stat` (`None`
+/// once it has ended).
+fn cpu_seconds(pid: u32, ticks: f64) -> Option<f64> {
+    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
+    // The fields after the command name, which is in parentheses and may hold spaces.
+    let rest = &stat[stat.rfind(')')? + 2..];
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    // utime and stime are fields 14 and 15 of the line, 12 and 13 after the name.
+    let (u, s) = (
+        f.get(11)?.parse::<f64>().ok()?,
+        f.get(12)?.parse::<f64>().ok()?,
+    );
+    Some((u + s) / ticks)
+}
+
+/// Clock ticks per second of `/proc`'s times.
+fn clock_ticks() -> f64 {
+    Command::new("getconf")
+        .arg("CLK_TCK")
+        .output()
+        .ok()
+        .and_then(|o| String::from_utf8(o.stdout).ok())
+        .and_then(|t| t.trim().parse().ok())
+        .unwrap_or(100.0)
+}
+
+/// Runs `dmd ARGS` and sends it SIGTERM once it has used `cpu` seconds of CPU (a moment that
+/// means the same point of the run whatever the machine's load); its exit status and standard
+/// error.
 fn run_and_stop(
     dmd: &Path,
     args: &[&std::ffi::OsStr],
-    ready: &Path,
-    delay: Duration,
+    cpu: f64,
 ) -> Result<(Option<i32>, String), String> {
+    let ticks = clock_ticks();
     let mut child = Command::new(dmd)
         .args(args)
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
         .spawn()
         .map_err(|e| format!("cannot start dmd: {e}"))?;
-    let t0 = Instant::now();
-    while !ready.exists() && t0.elapsed() < Duration::from_secs(600) {
+    let pid = child.id();
+    loop {
         if child.try_wait().map_err(|e| e.to_string())?.is_some() {
+            break;
+        }
+        if cpu_seconds(pid, ticks).is_some_and(|c| c >= cpu) {
+            let k = Command::new("kill")
+                .args(["-TERM", &pid.to_string()])
+                .status()
+                .map_err(|e| format!("cannot start kill: {e}"))?;
+            if !k.success() {
+                return Err("kill -TERM failed".into());
+            }
             break;
         }
         std::thread::sleep(Duration::from_millis(5));
-    }
-    let end = Instant::now() + delay;
-    while Instant::now() < end {
-        if child.try_wait().map_err(|e| e.to_string())?.is_some() {
-            break;
-        }
-        std::thread::sleep(Duration::from_millis(5).min(end - Instant::now()));
-    }
-    if child.try_wait().map_err(|e| e.to_string())?.is_none() {
-        let k = Command::new("kill")
-            .args(["-TERM", &child.id().to_string()])
-            .status()
-            .map_err(|e| format!("cannot start kill: {e}"))?;
-        if !k.success() {
-            return Err("kill -TERM failed".into());
-        }
     }
     let o = child.wait_with_output().map_err(|e| e.to_string())?;
     Ok((
@@ -432,7 +456,7 @@ fn run_case(
     let mut text = format!(
         "{events} events of production: {} s of CPU, {} s of wall-clock time in the straight \
          run; files compared: {}.\n\n\
-         | trial | first stop (s into production) | exit | second stop (s into the resumed run) | exit | resumed to the end | files and summary |\n\
+         | trial | first stop (CPU s into the run) | exit | second stop (CPU s into the resumed run) | exit | resumed to the end | files and summary |\n\
          |---|---|---|---|---|---|---|\n",
         short(cpu),
         short(wall),
@@ -442,9 +466,8 @@ fn run_case(
     let mut stopped = 0;
     for t in 0..o.trials {
         let out = dir.join(format!("trial{t}"));
-        let ready = out.join("series.csv.partial");
         let ck = out.join("checkpoint.dmd");
-        let first = rng.between(0.05, 0.85) * wall;
+        let first = rng.between(0.05, 0.85) * cpu;
         let (code, err) = run_and_stop(
             dmd,
             &[
@@ -454,8 +477,7 @@ fn run_case(
                 "--out".as_ref(),
                 &os(&out),
             ],
-            &ready,
-            Duration::from_secs_f64(first),
+            first,
         )?;
         let mut row = format!("| {} | {} | {} |", t + 1, short(first), exit_text(code));
         let mut trial_ok = match code {
@@ -473,12 +495,11 @@ fn run_case(
         let mut second_text = ("–".to_owned(), "–".to_owned());
         if trial_ok && code == Some(INTERRUPTED) {
             if t % 2 == 1 {
-                let second = rng.between(0.05, 0.5) * wall;
+                let second = rng.between(0.05, 0.5) * (cpu - first).max(0.0);
                 let (code2, err2) = run_and_stop(
                     dmd,
                     &["resume".as_ref(), "--quiet".as_ref(), &os(&ck)],
-                    &ready,
-                    Duration::from_secs_f64(second),
+                    second,
                 )?;
                 second_text = (short(second), exit_text(code2));
                 if !matches!(code2, Some(INTERRUPTED) | Some(0)) {
