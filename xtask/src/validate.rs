@@ -120,6 +120,14 @@ pub(crate) const CHECKS: &[Check] = &[
         quick: &["--quick"],
     },
     Check {
+        name: "signals",
+        title: "Signals: SIGTERM at random moments of 30 s runs, resumed bit for bit (hard spheres and rods)",
+        package: "dmd-sim",
+        example: "validate_signals",
+        full: &[],
+        quick: &["--quick"],
+    },
+    Check {
         name: "collide",
         title: "Impulse rules: conservation, constraints, reversibility and cross-check statistics",
         package: "dmd-collide",

@@ -135,6 +135,43 @@ impl Blocks {
         self.len() == 0
     }
 
+    /// Bytes it takes: one level per doubling of the values pushed, `O(log n)`.
+    pub fn bytes(&self) -> usize {
+        std::mem::size_of::<Self>() + self.levels.capacity() * std::mem::size_of::<Level>()
+    }
+
+    /// Whether a state read back (from a checkpoint) is one that pushing values gives: each
+    /// level holds half the values of the one below (rounded down) and a pending value exactly
+    /// when its count is odd, with finite means and non-negative spreads.
+    ///
+    /// # Errors
+    /// What does not fit.
+    pub fn check(&self) -> Result<(), String> {
+        for (k, l) in self.levels.iter().enumerate() {
+            let below = if k == 0 {
+                None
+            } else {
+                Some(self.levels[k - 1].count / 2)
+            };
+            // A level with a pair done has handed it on: the top one holds its first value only.
+            let top = k + 1 == self.levels.len();
+            let ok = below.is_none_or(|c| c == l.count)
+                && (!top || l.count == 1)
+                && l.pending.is_some() == (l.count % 2 == 1)
+                && l.pending.is_none_or(f64::is_finite)
+                && l.mean.is_finite()
+                && l.m2.is_finite()
+                && l.m2 >= 0.0;
+            if !ok {
+                return Err(format!(
+                    "its blocking level {k} ({} values) is not one that sampling gives",
+                    l.count
+                ));
+            }
+        }
+        Ok(())
+    }
+
     /// Mean of every value pushed and its standard error by the rule of [`block_average`]
     /// (the largest over the levels with at least 16 blocks; NaN with fewer than 16 values).
     pub fn estimate(&self) -> BlockEstimate {
@@ -247,6 +284,99 @@ mod tests {
         assert!(plateau(&[(1.0, 64), (1.0, 32), (1.0, 16)]));
         assert!(!plateau(&[(1.0, 64), (1.0, 32), (1.41, 16)]));
         assert!(!plateau(&[(1.0, 64), (1.3, 32), (1.41, 16)]));
+    }
+
+    /// The online accumulator gives the stored series' estimate for any series: the same
+    /// levels, blocks, samples and plateau verdict, and mean and error equal up to round-off
+    /// (Welford's running sums against two passes).
+    mod online {
+        use super::super::*;
+        use proptest::prelude::*;
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(200))]
+            #[test]
+            fn online_estimate_is_the_stored_series_estimate(
+                n in 0usize..5000,
+                phi in 0.0f64..0.999,
+                offset in -1e6f64..1e6,
+                scale in 1e-6f64..1e6,
+                seed in any::<u64>(),
+            ) {
+                let x: Vec<f64> = super::ar1(phi, n, seed)
+                    .into_iter()
+                    .map(|v| offset + scale * v)
+                    .collect();
+                let mut b = Blocks::default();
+                for &v in &x {
+                    b.push(v);
+                }
+                prop_assert!(b.check().is_ok());
+                let (a, o) = (block_average(&x), b.estimate());
+                prop_assert_eq!((a.blocks, a.samples), (o.blocks, o.samples));
+                prop_assert_eq!(a.converged, o.converged);
+                if n > 0 {
+                    let tol = 1e-12 * (offset.abs() + scale);
+                    prop_assert!((a.mean - o.mean).abs() <= tol, "{} {}", a.mean, o.mean);
+                }
+                if n >= 16 {
+                    // Round-off of the spreads is relative to the mean's size over the error's.
+                    let tol = 1e-9 * a.error + 1e-13 * (offset.abs() + scale);
+                    prop_assert!((a.error - o.error).abs() <= tol, "{} {}", a.error, o.error);
+                } else {
+                    prop_assert!(a.error.is_nan() && o.error.is_nan());
+                }
+            }
+        }
+    }
+
+    /// A million values take 20 levels of a few dozen bytes: memory grows as `log2 n`, not
+    /// with `n` (the stored series would take 8 MB).
+    #[test]
+    fn online_blocks_stay_small_after_a_million_values() {
+        let mut b = Blocks::default();
+        let x = ar1(0.9, 1000, 77);
+        for &v in &x {
+            b.push(v);
+        }
+        let (levels_1e3, bytes_1e3) = (b.levels.len(), b.bytes());
+        for k in 1000..1_000_000 {
+            b.push(x[k % 1000]);
+        }
+        assert_eq!(b.len(), 1_000_000);
+        assert_eq!(levels_1e3, 10);
+        assert_eq!(b.levels.len(), 20);
+        assert!(
+            b.bytes() <= 2 * bytes_1e3 + 1024,
+            "{} {}",
+            b.bytes(),
+            bytes_1e3
+        );
+        assert!(b.bytes() < 2048, "{} bytes", b.bytes());
+        assert!(b.check().is_ok());
+        // The checkpoint's form of it is as small.
+        assert!(postcard::to_allocvec(&b).unwrap().len() < 1024);
+    }
+
+    /// A state that pushing cannot give is refused (a forged checkpoint).
+    #[test]
+    fn inconsistent_blocks_are_refused() {
+        let mut b = Blocks::default();
+        for v in ar1(0.5, 100, 3) {
+            b.push(v);
+        }
+        let mut bad = b.clone();
+        bad.levels[2].count += 1;
+        assert!(bad.check().is_err());
+        let mut bad = b.clone();
+        bad.levels[0].m2 = -1.0;
+        assert!(bad.check().is_err());
+        let mut bad = b.clone();
+        bad.levels[1].pending = Some(f64::NAN);
+        assert!(bad.check().is_err());
+        let mut bad = b.clone();
+        bad.levels.push(Level::default());
+        assert!(bad.check().is_err());
     }
 
     #[test]

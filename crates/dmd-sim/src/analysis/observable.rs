@@ -808,7 +808,7 @@ pub struct Observers {
     pub trajectory: Option<crate::analysis::output::Trajectory>,
     /// GSD trajectory frames, frame stream 1.
     pub gsd: Option<crate::analysis::output::GsdTrajectory>,
-    /// The per-sample series behind the summary's error bars.
+    /// The online accumulators of the per-sample quantities behind the summary's error bars.
     pub samples: Option<crate::analysis::smooth::Samples>,
     /// The smooth potential (terraced rods and Gay–Berne), evaluated at every
     /// `smooth_every`-th sample.
@@ -839,7 +839,7 @@ impl Sampler for Observers {
             s.sample(view);
         }
         if let Some(s) = &mut self.samples {
-            let due = (s.rows().len() as u64).is_multiple_of(self.smooth_every.max(1));
+            let due = s.count().is_multiple_of(self.smooth_every.max(1));
             let smooth = self
                 .smooth
                 .as_ref()
@@ -876,7 +876,7 @@ impl Sampler for Observers {
     }
 
     fn over_budget(&self) -> Option<String> {
-        use crate::analysis::output::{SAMPLE_ROW_BYTES, SERIES_ROW_BYTES, short};
+        use crate::analysis::output::{SERIES_ROW_BYTES, short};
         let max = self.max_bytes? as f64;
         let rows = self.series.as_ref().map_or(0, |s| s.rows) as f64;
         if rows * SERIES_ROW_BYTES > max {
@@ -908,17 +908,6 @@ impl Sampler for Observers {
                  output.max_bytes",
                 short(frames),
                 short(frames * self.gsd_frame_bytes),
-                short(max)
-            ));
-        }
-        let samples = self.samples.as_ref().map_or(0, |s| s.rows().len()) as f64;
-        if samples * SAMPLE_ROW_BYTES > max {
-            return Some(format!(
-                "output.sample_interval: {} samples kept for the summary's error bars take \
-                 about {} bytes, the limit output.max_bytes = {}: lengthen \
-                 output.sample_interval, or raise output.max_bytes",
-                short(samples),
-                short(samples * SAMPLE_ROW_BYTES),
                 short(max)
             ));
         }

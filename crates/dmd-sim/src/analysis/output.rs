@@ -16,11 +16,6 @@ use crate::engine::simulation::View;
 /// bytes in memory).
 pub const SERIES_ROW_BYTES: f64 = 150.0;
 
-/// Bytes of one sample of the per-sample series behind the summary's error bars, held in
-/// memory for the whole production (six numbers of 8 bytes, and as much again while the
-/// vector doubles its capacity).
-pub const SAMPLE_ROW_BYTES: f64 = 96.0;
-
 /// Bytes of one lag of the correlation buffers (MSD, VACF, two orientational ACFs, count).
 pub const LAG_BYTES: f64 = 40.0;
 
@@ -43,6 +38,17 @@ pub const GSD_PARTICLE_BYTES: f64 = 68.0;
 /// Bytes of a `trajectory.gsd` frame beyond its particles: step, the time and energies in
 /// `log/`, index entries (with the index's growth by doubling) and, once, the types and shapes.
 pub const GSD_FRAME_BYTES: f64 = 1024.0;
+
+/// A number as a scene gave it, for messages: the shortest digits that read back as the same
+/// number, in exponent form outside `1e-4 ≤ |x| < 1e15` (`1e20`, `-1e300`, `2.5`, `1e-9`),
+/// never the hundreds of digits Rust's plain `{}` spells out for `1e300`.
+pub fn given(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() || (1e-4..1e15).contains(&x.abs()) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
 
 /// A number in short form: `8e15`, `2.8e9`, `0.001`, `150`.
 pub fn short(x: f64) -> String {
@@ -1348,6 +1354,31 @@ impl GsdTrajectory {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Numbers in messages are short and exact: what the scene said, read back unchanged.
+    #[test]
+    fn given_numbers_are_short_and_read_back_exactly() {
+        for (x, text) in [
+            (1e20, "1e20"),
+            (-1e300, "-1e300"),
+            (2.5, "2.5"),
+            (1e-9, "1e-9"),
+            (0.0, "0"),
+            (150.0, "150"),
+            (f64::INFINITY, "inf"),
+            (123456789012345.0, "123456789012345"),
+            (0.1 + 0.2, "0.30000000000000004"),
+        ] {
+            assert_eq!(given(x), text);
+            assert_eq!(given(x).parse::<f64>().unwrap(), x);
+        }
+        for k in -320..309 {
+            let x = 1.2345 * 10f64.powi(k);
+            let s = given(x);
+            assert!(s.len() <= 24, "{s}");
+            assert_eq!(s.parse::<f64>().unwrap(), x);
+        }
+    }
 
     /// A streamed table is byte for byte the table written at once, also when it is cut at a
     /// mark and continued (a resumed run): no row lost or doubled.

@@ -1,5 +1,5 @@
-//! Estimators of the continuous model along a trajectory, and the per-sample series the
-//! summary's error bars come from.
+//! Estimators of the continuous model along a trajectory, and the online accumulators of the
+//! per-sample quantities the summary's error bars come from.
 //!
 //! A terraced run samples the terraced potential `V` (003 Eq. 7), whose averages differ from
 //! the smooth potential's by the terrace width. At every sample the [`Estimator`] evaluates the
@@ -11,16 +11,18 @@
 //! `P = (N kT_t + W/3) / V` with `kT_t` the instantaneous translational temperature, the
 //! standard-MD engine's own formula, so that the two engines' numbers compare directly.
 //!
-//! [`Samples`] keeps, at every sample, the instantaneous temperature, the stored (terraced)
+//! [`Samples`] takes, at every sample, the instantaneous temperature, the stored (terraced)
 //! potential energy, the collision-virial pressure of the interval since the previous sample
-//! and the two smooth estimates; the summary takes their means and Flyvbjerg–Petersen
-//! block-average errors ([`block_average`]).
+//! and the two smooth estimates into online blocking accumulators ([`Blocks`]); the summary
+//! takes their means and Flyvbjerg–Petersen block-average errors, the numbers
+//! [`block_average`](crate::analysis::block::block_average) gives for the stored series, in
+//! memory that does not grow with the run.
 
 use glam::{DQuat, DVec3};
 use potential::{PairGeometry, PairPotential, RigidGeometry, RigidPairPotential, Smoothed};
 use serde::{Deserialize, Serialize};
 
-use crate::analysis::block::{BlockEstimate, block_average};
+use crate::analysis::block::{BlockEstimate, Blocks};
 use crate::analysis::pairs::{for_each_pair, wrap};
 use crate::engine::simulation::View;
 use crate::engine::sum::Compensated;
@@ -228,28 +230,28 @@ impl<P: RigidPairPotential + std::fmt::Debug + Send> Evaluate for RigidEstimator
     }
 }
 
-/// What one sample recorded.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct SampleRow {
-    /// Instantaneous kinetic temperature `2K/dof`.
-    pub temperature: f64,
-    /// Instantaneous translational temperature `2K_t/dof_t`.
-    pub translational_temperature: f64,
-    /// The engine's own potential energy (the terraced one in a terraced run).
-    pub potential: f64,
-    /// The engine's pressure over the interval since the previous sample (collision virial
-    /// and mean kinetic energy; NaN for the first sample).
-    pub pressure: f64,
-    /// `U` of the smooth potential (NaN without an estimator).
-    pub potential_smooth: f64,
-    /// `(N kT_t + W/3)/V` of the smooth potential (NaN without an estimator).
-    pub pressure_smooth: f64,
-}
-
-/// The per-sample series of a production run (kept in checkpoints with the observables).
-#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+/// The per-sample quantities of a production run, each in its online blocking accumulator
+/// ([`Blocks`]): memory is `O(log samples)` whatever the run's length, and checkpoints keep the
+/// accumulators, so a resumed run continues them exactly.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Samples {
-    rows: Vec<SampleRow>,
+    /// Samples taken (the smooth potential is evaluated at every `smooth_every`-th).
+    count: u64,
+    /// Instantaneous kinetic temperature `2K/dof`.
+    temperature: Blocks,
+    /// Instantaneous translational temperature `2K_t/dof_t`.
+    translational_temperature: Blocks,
+    /// Instantaneous rotational temperature `(T dof − T_t dof_t)/dof_r` (bodies that rotate).
+    rotational_temperature: Blocks,
+    /// The engine's own potential energy per body (the terraced one in a terraced run).
+    potential_per_body: Blocks,
+    /// The engine's pressure over each interval between samples (collision virial and mean
+    /// kinetic energy; none for the first sample).
+    pressure: Blocks,
+    /// `U/N` of the smooth potential, at the samples that evaluated it to a number.
+    potential_smooth_per_body: Blocks,
+    /// `(N kT_t + W/3)/V` of the smooth potential, at the same samples.
+    pressure_smooth: Blocks,
     /// Elapsed time, virial and `∫K dt` at the previous sample.
     last: Option<(f64, f64, f64)>,
 }
@@ -311,69 +313,100 @@ impl Samples {
         let n = view.bodies.len() as f64;
         let l = view.lengths;
         let volume = l.x * l.y * l.z;
-        let pressure = match self.last {
-            Some((t, w, kint)) if view.elapsed > t => {
-                let dt = view.elapsed - t;
-                let kt = 2.0 * (view.kinetic_integral - kint) / dt / view.dof;
-                (n * kt + (view.virial - w) / (3.0 * dt)) / volume
-            }
-            _ => f64::NAN,
-        };
+        if let Some((t, w, kint)) = self.last
+            && view.elapsed > t
+        {
+            let dt = view.elapsed - t;
+            let kt = 2.0 * (view.kinetic_integral - kint) / dt / view.dof;
+            self.pressure
+                .push((n * kt + (view.virial - w) / (3.0 * dt)) / volume);
+        }
         self.last = Some((view.elapsed, view.virial, view.kinetic_integral));
-        let kt_t =
-            2.0 * (view.kinetic - view.rotational_kinetic) / (view.dof - view.rotational_dof);
-        let (potential_smooth, pressure_smooth) = match smooth {
-            Some(s) => (s.energy, (n * kt_t + s.virial / 3.0) / volume),
-            None => (f64::NAN, f64::NAN),
-        };
-        self.rows.push(SampleRow {
-            temperature: 2.0 * view.kinetic / view.dof,
-            translational_temperature: kt_t,
-            potential: view.potential,
-            pressure,
-            potential_smooth,
-            pressure_smooth,
-        });
+        self.count += 1;
+        let t_dof = view.dof - view.rotational_dof;
+        let kt = 2.0 * view.kinetic / view.dof;
+        let kt_t = 2.0 * (view.kinetic - view.rotational_kinetic) / t_dof;
+        self.temperature.push(kt);
+        self.translational_temperature.push(kt_t);
+        if view.rotational_dof > 0.0 {
+            self.rotational_temperature
+                .push((kt * view.dof - kt_t * t_dof) / view.rotational_dof);
+        }
+        self.potential_per_body.push(view.potential / n);
+        // A configuration the smooth potential has no finite force for is left out of both.
+        if let Some(s) = smooth.filter(|s| !s.energy.is_nan()) {
+            self.potential_smooth_per_body.push(s.energy / n);
+            self.pressure_smooth
+                .push((n * kt_t + s.virial / 3.0) / volume);
+        }
     }
 
-    /// The rows.
-    pub fn rows(&self) -> &[SampleRow] {
-        &self.rows
+    /// Samples taken.
+    pub fn count(&self) -> u64 {
+        self.count
     }
 
-    /// Means and errors over the samples of `n` bodies with `dof` degrees of freedom of which
-    /// `rotational_dof` rotational (the smooth ones over the samples that evaluated them,
-    /// every `output.smooth_every`-th). A sample's rotational temperature is
-    /// `(T dof − T_t (dof − rotational_dof)) / rotational_dof`.
-    pub fn summary(&self, n: usize, dof: f64, rotational_dof: f64) -> SampleSummary {
-        let col = |f: &dyn Fn(&SampleRow) -> f64| -> Vec<f64> { self.rows.iter().map(f).collect() };
-        let smooth_col = |f: &dyn Fn(&SampleRow) -> f64| -> Vec<f64> {
-            self.rows
-                .iter()
-                .filter(|r| !r.potential_smooth.is_nan())
-                .map(f)
-                .collect()
-        };
-        let nf = n as f64;
-        let smooth = self.rows.iter().any(|r| !r.potential_smooth.is_nan());
-        let pressures: Vec<f64> = col(&|r| r.pressure)
-            .into_iter()
-            .filter(|p| !p.is_nan())
-            .collect();
+    /// Bytes the accumulators take (they grow as `log2` of the samples).
+    pub fn bytes(&self) -> usize {
+        std::mem::size_of::<Self>() + self.each().iter().map(|b| b.bytes()).sum::<usize>()
+    }
+
+    fn each(&self) -> [&Blocks; 7] {
+        [
+            &self.temperature,
+            &self.translational_temperature,
+            &self.rotational_temperature,
+            &self.potential_per_body,
+            &self.pressure,
+            &self.potential_smooth_per_body,
+            &self.pressure_smooth,
+        ]
+    }
+
+    /// Whether a state read from a checkpoint is one that sampling can produce: every
+    /// accumulator consistent ([`Blocks::check`]), one temperature per sample, a pressure per
+    /// interval, smooth values at most once per sample.
+    ///
+    /// # Errors
+    /// What does not fit.
+    pub fn check(&self) -> Result<(), String> {
+        if let Some(e) = self.each().iter().find_map(|b| b.check().err()) {
+            return Err(e);
+        }
+        let n = self.count;
+        let ok = self.temperature.len() == n
+            && self.translational_temperature.len() == n
+            && self.potential_per_body.len() == n
+            && (self.rotational_temperature.is_empty() || self.rotational_temperature.len() == n)
+            && self.pressure.len() <= n.saturating_sub(1)
+            && self.potential_smooth_per_body.len() == self.pressure_smooth.len()
+            && self.potential_smooth_per_body.len() <= n
+            && (n == 0) == self.last.is_none()
+            && self
+                .last
+                .is_none_or(|(t, w, k)| t.is_finite() && w.is_finite() && k.is_finite());
+        if ok {
+            Ok(())
+        } else {
+            Err(format!(
+                "its per-sample accumulators do not fit its {n} samples"
+            ))
+        }
+    }
+
+    /// Means and errors over the samples (the smooth ones over the samples that evaluated
+    /// them, every `output.smooth_every`-th); rotational temperature for bodies that rotate.
+    pub fn summary(&self) -> SampleSummary {
+        let smooth = !self.potential_smooth_per_body.is_empty();
         SampleSummary {
-            temperature: block_average(&col(&|r| r.temperature)),
-            translational_temperature: block_average(&col(&|r| r.translational_temperature)),
-            rotational_temperature: (rotational_dof > 0.0).then(|| {
-                let t_dof = dof - rotational_dof;
-                block_average(&col(&|r| {
-                    (r.temperature * dof - r.translational_temperature * t_dof) / rotational_dof
-                }))
-            }),
-            potential_per_body: block_average(&col(&|r| r.potential / nf)),
-            pressure: block_average(&pressures),
-            potential_smooth_per_body: smooth
-                .then(|| block_average(&smooth_col(&|r| r.potential_smooth / nf))),
-            pressure_smooth: smooth.then(|| block_average(&smooth_col(&|r| r.pressure_smooth))),
+            temperature: self.temperature.estimate(),
+            translational_temperature: self.translational_temperature.estimate(),
+            rotational_temperature: (!self.rotational_temperature.is_empty())
+                .then(|| self.rotational_temperature.estimate()),
+            potential_per_body: self.potential_per_body.estimate(),
+            pressure: self.pressure.estimate(),
+            potential_smooth_per_body: smooth.then(|| self.potential_smooth_per_body.estimate()),
+            pressure_smooth: smooth.then(|| self.pressure_smooth.estimate()),
         }
     }
 }

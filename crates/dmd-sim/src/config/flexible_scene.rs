@@ -17,6 +17,7 @@
 use collide::Bond;
 use glam::DVec3;
 
+use crate::analysis::output::given;
 use crate::config::init::Configuration;
 use crate::config::scene::{Orientations, Positions, Scene, SceneError, SearchMethodSpec};
 use crate::config::site_scene::{ORIENTATION_TRIES, STEP_FRACTION, WINDOW_STEPS};
@@ -166,7 +167,7 @@ pub(crate) fn check_rest(scene: &Scene) -> Result<(), SceneError> {
         if !(1e-15..=1e-4).contains(&r.tolerance) {
             return Err(SceneError::invalid(
                 "rattle.tolerance",
-                format!("must be in [1e-15, 1e-4], got {}", r.tolerance),
+                format!("must be in [1e-15, 1e-4], got {}", given(r.tolerance)),
             ));
         }
     }

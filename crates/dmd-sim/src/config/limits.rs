@@ -4,11 +4,12 @@
 //!
 //! - **Output sizes** ([`check_outputs`]): the correlation buffers of `msd`/`vacf`/
 //!   `orientation_acf` (known from the keys alone), and with `run.time` the rows of
-//!   `series.csv`, the samples kept for the summary's error bars and the size of
-//!   `trajectory.xyz`, are estimated and refused above
+//!   `series.csv` and the size of the trajectories, are estimated and refused above
 //!   `output.max_bytes` ([`DEFAULT_MAX_BYTES`] unless given). A run whose length is given in
 //!   events cannot be estimated beforehand: [`Observers`](crate::analysis::observable::Observers) stops
-//!   it when the series, the samples or the trajectory reach the same limit.
+//!   it when the series or a trajectory reach the same limit. The samples behind the
+//!   summary's error bars need no limit: they are accumulated online, in memory that grows as
+//!   the logarithm of their number.
 //! - **Temperatures** ([`check_temperatures`]): normal numbers within [`TEMPERATURE_RATIO`] of
 //!   the potential's energy scale (its smallest finite step or well depth), or within
 //!   [`TEMPERATURE_RANGE`] for pure hard cores, which have no energy scale.
@@ -17,8 +18,7 @@
 //!   reach is known).
 
 pub use crate::analysis::output::{
-    GSD_FRAME_BYTES, GSD_PARTICLE_BYTES, LAG_BYTES, SAMPLE_ROW_BYTES, SERIES_ROW_BYTES, short,
-    trajectory_line_bytes,
+    GSD_FRAME_BYTES, GSD_PARTICLE_BYTES, LAG_BYTES, SERIES_ROW_BYTES, short, trajectory_line_bytes,
 };
 pub use crate::config::scene::{DEFAULT_MAX_BYTES, MAX_STEP_ENERGY};
 use crate::config::scene::{Scene, SceneError};
@@ -179,25 +179,6 @@ pub fn check_outputs(scene: &Scene) -> Result<(), SceneError> {
                     "output.series".to_owned(),
                     format!(
                         "{} rows (run.time = {} every output.sample_interval = {})",
-                        short(rows),
-                        short(t),
-                        short(dt)
-                    ),
-                    bytes,
-                    "lengthen output.sample_interval",
-                ));
-            }
-        }
-        // Every sample of production is kept for the summary's error bars (blocking).
-        if let Some(t) = scene.run.time {
-            let rows = (t / dt).floor() + 1.0;
-            let bytes = rows * SAMPLE_ROW_BYTES;
-            if bytes > limit {
-                return Err(too_big(
-                    "output.sample_interval".to_owned(),
-                    format!(
-                        "{} samples (run.time = {} every output.sample_interval = {}) kept \
-                         in memory for the summary's error bars",
                         short(rows),
                         short(t),
                         short(dt)

@@ -18,6 +18,7 @@ use std::path::PathBuf;
 use serde::{Deserialize, Deserializer};
 
 use crate::analysis::output::Drawing;
+use crate::analysis::output::given;
 
 /// The scene format this version of `dmd` reads.
 pub const FORMAT_VERSION: u32 = 1;
@@ -1049,9 +1050,15 @@ fn count<'de, D: Deserializer<'de>>(d: D) -> Result<u64, D::Error> {
         fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<u64, E> {
             if v >= 0.0 && v.fract() == 0.0 && v < 1.8e19 {
                 Ok(v as u64)
+            } else if v >= 1.8e19 && v.is_finite() {
+                Err(E::custom(format!(
+                    "expected a whole number below 1.8e19, got {}",
+                    given(v)
+                )))
             } else {
                 Err(E::custom(format!(
-                    "expected a non-negative whole number, got {v}"
+                    "expected a non-negative whole number, got {}",
+                    given(v)
                 )))
             }
         }
@@ -1672,7 +1679,7 @@ impl Scene {
                     "hmc.fault_fraction",
                     format!(
                         "must be at least 0 and less than 1, got {}",
-                        h.fault_fraction
+                        given(h.fault_fraction)
                     ),
                 ));
             }
@@ -1935,7 +1942,7 @@ impl Scene {
                 if x.is_nan() || x <= 0.0 {
                     return Err(SceneError::invalid(
                         "search.max_change",
-                        format!("must be a positive fraction or inf, got {x}"),
+                        format!("must be a positive fraction or inf, got {}", given(x)),
                     ));
                 }
                 if sr.method != SearchMethodSpec::Adaptive {
@@ -2010,7 +2017,10 @@ fn check_terraces(k: usize, p: &PotentialSpec, t: &TerraceSpec) -> Result<(), Sc
         if let Some(x) = levels.iter().find(|x| !x.is_finite()) {
             return Err(SceneError::invalid(
                 key("levels"),
-                format!("levels must be finite energies, got {x}"),
+                format!(
+                    "levels must be finite energies, got {}",
+                    crate::analysis::output::given(*x)
+                ),
             ));
         }
         if t.placement != PlacementSpec::EqualEnergy {
@@ -2049,7 +2059,10 @@ fn check_terraces(k: usize, p: &PotentialSpec, t: &TerraceSpec) -> Result<(), Sc
         if !(o.is_finite() && o < 0.0) {
             return Err(SceneError::invalid(
                 key("outermost"),
-                format!("must be a negative energy (the outermost level below zero), got {o}"),
+                format!(
+                    "must be a negative energy (the outermost level below zero), got {}",
+                    crate::analysis::output::given(o)
+                ),
             ));
         }
         if t.levels.is_some() {
@@ -2095,7 +2108,7 @@ pub(crate) fn check_search_keys(sr: &SearchSpec, threshold: &str) -> Result<(), 
     {
         return Err(SceneError::invalid(
             "search.window",
-            format!("must be a positive time or inf, got {x}"),
+            format!("must be a positive time or inf, got {}", given(x)),
         ));
     }
     if let Some(j) = sr.jitter
@@ -2103,7 +2116,7 @@ pub(crate) fn check_search_keys(sr: &SearchSpec, threshold: &str) -> Result<(), 
     {
         return Err(SceneError::invalid(
             "search.jitter",
-            format!("must be at least 0 and below 0.5, got {j}"),
+            format!("must be at least 0 and below 0.5, got {}", given(j)),
         ));
     }
     if let Some(x) = sr.grid_threshold {
@@ -2116,7 +2129,7 @@ pub(crate) fn check_search_keys(sr: &SearchSpec, threshold: &str) -> Result<(), 
         if x.is_nan() || x < 0.0 {
             return Err(SceneError::invalid(
                 "search.grid_threshold",
-                format!("must be {threshold}, got {x}"),
+                format!("must be {threshold}, got {}", given(x)),
             ));
         }
     }
@@ -2132,7 +2145,7 @@ pub(crate) fn positive(key: &str, x: f64) -> Result<(), SceneError> {
     } else {
         Err(SceneError::invalid(
             key,
-            format!("must be a positive finite number, got {x}"),
+            format!("must be a positive finite number, got {}", given(x)),
         ))
     }
 }
@@ -2143,7 +2156,7 @@ pub(crate) fn non_negative(key: &str, x: f64) -> Result<(), SceneError> {
     } else {
         Err(SceneError::invalid(
             key,
-            format!("must be a finite number ≥ 0, got {x}"),
+            format!("must be a finite number ≥ 0, got {}", given(x)),
         ))
     }
 }
@@ -2167,13 +2180,19 @@ pub(crate) fn check_steps_at(key: &str, steps: &[[f64; 2]]) -> Result<(), SceneE
         if !(r.is_finite() && r > 0.0) {
             return Err(SceneError::invalid(
                 here,
-                format!("the radius must be a positive finite number, got {r}"),
+                format!(
+                    "the radius must be a positive finite number, got {}",
+                    given(r)
+                ),
             ));
         }
         if dv.is_nan() || dv == f64::NEG_INFINITY {
             return Err(SceneError::invalid(
                 here,
-                format!("the energy step must be a number or inf (a hard core), got {dv}"),
+                format!(
+                    "the energy step must be a number or inf (a hard core), got {}",
+                    given(dv)
+                ),
             ));
         }
         if dv == 0.0 {

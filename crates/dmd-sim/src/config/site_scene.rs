@@ -14,6 +14,7 @@ use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;
 
+use crate::analysis::output::given;
 use crate::config::init::Configuration;
 use crate::config::scene::{
     ImpulseRuleSpec, MoleculeSpec, Orientations, Positions, Scene, SceneError, SearchMethodSpec,
@@ -211,7 +212,10 @@ pub(crate) fn check(scene: &Scene) -> Result<(), SceneError> {
         {
             return Err(SceneError::invalid(
                 key("molecule.elongation"),
-                format!("must be a positive finite site separation, got {elongation}"),
+                format!(
+                    "must be a positive finite site separation, got {}",
+                    given(elongation)
+                ),
             ));
         }
         if let Some(sites) = &s.sites {
@@ -235,7 +239,7 @@ pub(crate) fn check(scene: &Scene) -> Result<(), SceneError> {
                 if !(site.mass.is_finite() && site.mass > 0.0) {
                     return Err(SceneError::invalid(
                         here("mass"),
-                        format!("must be a positive finite number, got {}", site.mass),
+                        format!("must be a positive finite number, got {}", given(site.mass)),
                     ));
                 }
                 if site.position.iter().any(|x| !x.is_finite()) {

@@ -4,6 +4,7 @@
 
 use glam::DVec3;
 
+use crate::analysis::output::given;
 use crate::config::scene::{
     Engine, PotentialSpec, QueueKind, Scene, SceneError, ThermostatKind, ThermostatPhase,
 };
@@ -57,7 +58,7 @@ pub fn check(scene: &Scene) -> Result<(), SceneError> {
         let positive = |key: &str, x: Option<f64>| match x {
             Some(v) if !(v.is_finite() && v > 0.0) => Err(SceneError::invalid(
                 key,
-                format!("must be a positive finite number, got {v}"),
+                format!("must be a positive finite number, got {}", given(v)),
             )),
             _ => Ok(()),
         };
@@ -68,7 +69,7 @@ pub fn check(scene: &Scene) -> Result<(), SceneError> {
         {
             return Err(SceneError::invalid(
                 "smd.guard",
-                format!("must be a positive fraction or inf, got {g}"),
+                format!("must be a positive fraction or inf, got {}", given(g)),
             ));
         }
         if let Some(w) = s.smoothing {

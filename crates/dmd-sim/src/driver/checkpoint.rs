@@ -46,7 +46,7 @@ use crate::models::search::SearchStats;
 /// First bytes of every checkpoint.
 pub const MAGIC: &[u8; 8] = b"\x89DMD-CK\n";
 /// The layout version this `dmd` writes and reads.
-pub const FORMAT_VERSION: u32 = 6;
+pub const FORMAT_VERSION: u32 = 7;
 /// The `dmd` version written into checkpoints.
 pub const CODE_VERSION: &str = env!("CARGO_PKG_VERSION");
 /// The checkpoint's file name in the output folder.
@@ -220,7 +220,7 @@ pub struct ObserverState {
     pub trajectory: Option<(u64, u64)>,
     /// The GSD trajectory's frames.
     pub gsd: Option<u64>,
-    /// The per-sample series of the summary's error bars and smooth estimators.
+    /// The online accumulators of the summary's error bars and smooth estimators.
     pub samples: Option<crate::analysis::smooth::Samples>,
 }
 
@@ -369,7 +369,8 @@ pub fn decode(bytes: &[u8]) -> Result<Checkpoint, Problem> {
 }
 
 /// Checks the accumulated observables of a checkpoint against fresh ones the scene gives
-/// (`rdf`, `correlations`) for `n` bodies of `species`: the same settings, arrays of the sizes
+/// (`rdf`, `correlations`, the samples behind the error bars if `sampled`) for `n` bodies of
+/// `species`: the same settings, arrays of the sizes
 /// the settings give, time origins of the right length taken at past samples. The observables
 /// keep their fields private; they are read through their serialised form (a field renamed
 /// there fails the checkpoint tests).
@@ -380,9 +381,16 @@ pub fn check_observers(
     saved: &ObserverState,
     rdf: Option<&Rdf>,
     correlations: Option<&Correlations>,
+    sampled: bool,
     species: &[u32],
     volume: f64,
 ) -> Result<(), String> {
+    if saved.samples.is_some() != sampled {
+        return Err("its samples do not match the scene's output.sample_interval".into());
+    }
+    if let Some(s) = &saved.samples {
+        s.check()?;
+    }
     use serde_json::Value;
     let n = species.len() as u64;
     let num = |v: &Value, k: &str| v.get(k).and_then(Value::as_u64);

@@ -45,7 +45,7 @@ use serde::{Deserialize, Serialize};
 
 use glam::DVec3;
 
-pub use crate::analysis::block::{BlockEstimate, block_average};
+pub use crate::analysis::block::{BlockEstimate, Blocks, block_average};
 use crate::engine::model::PairModel;
 use crate::engine::schedule::Scheduler;
 use crate::engine::simulation::{NoSampler, SimError, Simulation, Stop};
@@ -183,10 +183,14 @@ pub struct HmcStats {
     pub histogram: Vec<u64>,
     /// `ΔH` below the histogram, above it (finite), `+∞`, and within round-off of 0.
     pub histogram_outside: (u64, u64, u64, u64),
-    /// Potential energy of the chain state after each segment.
-    pub potential: Vec<f64>,
-    /// Kinetic energy of the chain state after each segment.
-    pub kinetic: Vec<f64>,
+    /// Potential energy of the chain state after each segment (the finite ones), accumulated
+    /// online for its mean and block-average error: memory grows as the logarithm of the
+    /// segments.
+    pub potential: Blocks,
+    /// Kinetic energy of the chain state after each segment (the finite ones), likewise.
+    pub kinetic: Blocks,
+    /// Segments whose chain state has a non-finite potential energy (overlapping bodies).
+    pub overlapping_states: u64,
 }
 
 /// A hybrid Monte Carlo chain: its settings, generator, segment count and statistics.
@@ -238,8 +242,8 @@ impl Chain {
         if decided != Some(s.segments)
             || s.delta_h_finite > s.segments
             || s.segments_with_misses > s.segments
-            || segments != Some(s.potential.len())
-            || segments != Some(s.kinetic.len())
+            || s.potential.len().checked_add(s.overlapping_states) != Some(s.segments)
+            || s.kinetic.len() > s.segments
             || self
                 .series
                 .as_ref()
@@ -252,7 +256,8 @@ impl Chain {
             && s.delta_h_max_abs.is_finite()
             && s.delta_h_max_abs >= 0.0
             && s.exp_sum >= 0.0
-            && s.potential.iter().chain(&s.kinetic).all(|x| !x.is_nan()))
+            && s.potential.check().is_ok()
+            && s.kinetic.check().is_ok())
         {
             return Err("its HMC sums are not valid numbers".into());
         }
@@ -433,8 +438,14 @@ impl Chain {
         if round_off {
             s.histogram_outside.3 += 1;
         }
-        s.potential.push(seg.potential);
-        s.kinetic.push(seg.kinetic);
+        if seg.potential.is_finite() {
+            s.potential.push(seg.potential);
+        } else {
+            s.overlapping_states += 1;
+        }
+        if seg.kinetic.is_finite() {
+            s.kinetic.push(seg.kinetic);
+        }
         if let Some(series) = &mut self.series {
             series.push(*seg);
         }
@@ -444,15 +455,12 @@ impl Chain {
     pub fn summary(&self, n: usize) -> HmcSummary {
         let s = &self.stats;
         let n = n as f64;
-        let per_body = |x: &[f64]| {
-            let finite: Vec<f64> = x.iter().copied().filter(|v| v.is_finite()).collect();
-            let b = block_average(&finite);
+        let per_body = |x: &Blocks| {
+            let b = x.estimate();
             BlockEstimate {
                 mean: b.mean / n,
                 error: b.error / n,
-                blocks: b.blocks,
-                samples: finite.len() as u64,
-                converged: b.converged,
+                ..b
             }
         };
         let range = self.settings.histogram_range * self.settings.temperature;
@@ -513,7 +521,7 @@ impl Chain {
             },
             potential_energy_per_body: per_body(&s.potential),
             kinetic_energy_per_body: per_body(&s.kinetic),
-            overlapping_states: s.potential.iter().filter(|u| !u.is_finite()).count() as u64,
+            overlapping_states: s.overlapping_states,
         }
     }
 }

@@ -1359,6 +1359,7 @@ impl<M: PairModel, Q: Scheduler> StagedRun<M, Q> {
                     &c,
                     observers.rdf.as_ref(),
                     observers.correlations.as_ref(),
+                    observers.samples.is_some(),
                     &self.body_species,
                     l.x * l.y * l.z,
                 )
@@ -1636,7 +1637,7 @@ impl<M: PairModel, Q: Scheduler> StagedRun<M, Q> {
         let sampled = observers
             .samples
             .as_ref()
-            .map(|s| s.summary(n as usize, dof, sim.model().rotational_dof()));
+            .map(crate::analysis::smooth::Samples::summary);
         let diffusion = Correlations::diffusions(observers.correlations.as_ref());
         let summary = Summary {
             engine: "dmd".to_owned(),

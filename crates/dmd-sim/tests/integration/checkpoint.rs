@@ -599,6 +599,7 @@ fn forged_checkpoints_with_valid_crcs_are_refused_as_states() {
         seal(&b)
     };
     let n = c.sim.bodies.len();
+    assert!(c.observers.samples.as_ref().is_some_and(|s| s.count() > 40));
     let cases: Vec<(&str, Vec<u8>, &str)> = vec![
         (
             "nan-velocity",
@@ -727,6 +728,28 @@ fn forged_checkpoints_with_valid_crcs_are_refused_as_states() {
                 });
             }),
             "its correlations do not fit",
+        ),
+        (
+            "sample-count-beyond-its-accumulators",
+            edit(&|b| {
+                b.observers.samples = c.observers.samples.clone().map(|r| {
+                    let mut v = serde_json::to_value(&r).unwrap();
+                    v["count"] = serde_json::json!(v["count"].as_u64().unwrap() + 1);
+                    serde_json::from_value(v).unwrap()
+                });
+            }),
+            "its per-sample accumulators do not fit its",
+        ),
+        (
+            "blocking-level-forged",
+            edit(&|b| {
+                b.observers.samples = c.observers.samples.clone().map(|r| {
+                    let mut v = serde_json::to_value(&r).unwrap();
+                    v["pressure"]["levels"][1]["count"] = serde_json::json!(1_000_000u64);
+                    serde_json::from_value(v).unwrap()
+                });
+            }),
+            "its blocking level 1 (1000000 values) is not one that sampling gives",
         ),
         (
             "length-field-wraps-around",

@@ -375,8 +375,13 @@ fn rms(u: &[DVec3]) -> f64 {
     (u.iter().map(|x| x.length_squared()).sum::<f64>() / u.len() as f64).sqrt()
 }
 
-/// Steps held before [`Trajectory::trim`] drops those behind the present.
-pub const TRIM_AT: usize = 1024;
+/// Steps held before [`Trajectory::trim`] drops those behind the present. A molecule holds at
+/// most this many behind the present plus those its searches looked ahead (up to
+/// `search.window / rattle.step`), whatever the time since its last change: its memory does not
+/// grow with the run. The steps dropped are never asked for again (the loop only moves
+/// forward), so the value changes memory, not results; dropping costs a copy of the steps
+/// ahead, a few dozen.
+pub const TRIM_AT: usize = 32;
 
 /// The internal motion of one molecule from its last change: RATTLE steps of size `h` from
 /// time `t0`, computed on demand and kept (module documentation). Steps behind the loop's
@@ -805,6 +810,31 @@ mod tests {
         assert_eq!(t.computed_steps(), before);
         let (qc, uc) = t.state_at(&c, 2.4321).unwrap();
         assert_eq!((qp, up), (qc, uc));
+    }
+
+    /// A molecule that goes 10⁵ steps without a change, asked for its state as the loop moves
+    /// on and trimmed as the model does, holds at most [`TRIM_AT`] steps and a few, in storage
+    /// that does not grow with the steps.
+    #[test]
+    fn a_long_free_flight_holds_a_bounded_number_of_steps() {
+        let (q, u, c) = chain();
+        let h = 0.001;
+        let mut t = Trajectory::new(0.0, h, &q, &u);
+        let mut most = 0;
+        for k in 1..100_000 {
+            let now = k as f64 * h + 0.3 * h;
+            t.trim(now);
+            // A search looks a few steps ahead.
+            t.state_at(&c, now + 5.0 * h).unwrap();
+            most = most.max(t.held_steps());
+        }
+        assert!(most <= TRIM_AT + 8, "{most} steps held");
+        let per_step = t.n;
+        assert!(
+            t.q.capacity() <= 2 * (TRIM_AT + 8) * per_step,
+            "{} positions of capacity",
+            t.q.capacity()
+        );
     }
 
     #[test]
