@@ -4,13 +4,16 @@
 //! search step of a root-searched model, the smd engine's time step), short probe runs of the
 //! scene at the knob's value times 2, 1, ½ and ¼, the other knobs at the scene's values. Each
 //! probe is an ordinary run ([`run_scene`] or [`smd_engine::run`]) with `--set` overrides for
-//! the knob and a shortened length. The error of a probe is its difference from the finest
+//! the knob and a shortened length. The level rule of a terraced pair (its terrace energies)
+//! is a knob of choices: each other rule at the scene's ΔV against the scene's rule at the
+//! finest ΔV. The error of a probe is its difference from the finest
 //! probe of the same knob in the potential energy per body and the pressure, relative to a
 //! scale (|U/N| of the finest probe; for P the larger of |P| and ρkT, since P may be near
 //! zero), with the uncertainty of that difference from the two runs' own block-average errors
 //! (`_error` of the summary) in quadrature. A setting qualifies when `error + uncertainty` is
 //! within the target. The recommended value of each knob is its cheapest qualifying one, by CPU
-//! seconds of production per unit of simulated time. Knobs are judged one at a time; whether
+//! seconds of production per unit of simulated time; a quantity too noisy at this probe length
+//! to be shown within the target is named as not certified and left out of the judgement. Knobs are judged one at a time; whether
 //! their recommended values together meet the target is what `cargo xtask validate --only
 //! tune` checks on the shipped scenes.
 
@@ -464,7 +467,7 @@ pub fn knobs(scene: &Scene) -> Result<Vec<Knob>, TuneError> {
 /// steps ΔV, 003 Eq. 7), B₂-matched at the scene temperature, the middle of each terrace's
 /// range of `U`, and its shell average. All keep the levels, hence the reach and about the
 /// cost; on the stepped Lennard-Jones fluid at ΔV = ε/2 the B₂-matched energies take the
-/// smooth pressure from 17 % to 2 % of standard MD's (docs/VALIDATION.md, "Convergence of
+/// smooth pressure from 16 % to 2 % of standard MD's (docs/VALIDATION.md, "Convergence of
 /// terraced thermodynamics with ΔV"). Moving the outermost level out to the smooth
 /// potential's switching window was measured too, and is not offered: it costs four times as
 /// much at ε/2 and moves the smooth pressure further away. `(label, step_energy)`.
