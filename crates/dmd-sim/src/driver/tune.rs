@@ -512,7 +512,7 @@ fn level_rules(scene: &Scene, k: usize, step: &Knob) -> Option<Knob> {
         .collect();
     let finest = step.values()[FACTORS.len() - 1];
     choices.push(Choice {
-        label: format!("scene's rule, {}={}", step.key, short(finest)),
+        label: format!("scene's rule at {}={}", step.key, short(finest)),
         sets: step.sets(finest),
         recommend: Vec::new(),
     });

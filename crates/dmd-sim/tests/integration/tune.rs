@@ -68,7 +68,7 @@ fn tune_writes_its_table_and_recommends_the_cheapest_row_within_the_target() {
         .collect();
     assert_eq!(rules.len(), 4, "{rows:?}");
     assert!(
-        rules[3][0].starts_with("scene's rule, pair.0.terraces.step_kt=0.125"),
+        rules[3][0].starts_with("scene's rule at pair.0.terraces.step_kt=0.125"),
         "{:?}",
         rules[3]
     );
