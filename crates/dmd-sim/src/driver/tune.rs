@@ -1329,7 +1329,7 @@ mod tests {
         // U/N is certified, and the cheapest setting within 1 % in U/N is recommended.
         let mut rows = vec![
             probe_row(1.0, -3.20, 0.40, 0.01, 1.0),
-            probe_row(0.5, -3.14, 0.42, 0.01, 2.0),
+            probe_row(0.5, -3.145, 0.42, 0.01, 2.0),
             probe_row(0.25, -3.125, 0.53, 0.01, 4.0),
             probe_row(0.125, -3.12, 0.53, 0.01, 8.0),
         ];
