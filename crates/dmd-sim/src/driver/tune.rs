@@ -1083,10 +1083,20 @@ impl Tuning {
     }
 
     /// Whether the recommended settings together are certified in U/N and in P: every knob's
-    /// recommendation certifies it.
+    /// recommendation that changes the scene certifies it (a rule knob that keeps the
+    /// scene's rule adds no setting, and takes no claim away).
     pub fn certified_all(&self) -> [bool; 2] {
         let mut all = [true; 2];
-        for c in &self.certified {
+        for ((knob, c), r) in self
+            .knobs
+            .iter()
+            .zip(&self.certified)
+            .zip(&self.recommended)
+        {
+            let keeps = r.is_some_and(|r| knob.recommend(self.rows[r].value).is_empty());
+            if !knob.choices.is_empty() && keeps {
+                continue;
+            }
             all[0] &= c[0];
             all[1] &= c[1];
         }
@@ -1349,6 +1359,66 @@ mod tests {
             }
         }
         assert_eq!(judge(&mut rows, 0.01), Some((3, [false, false])));
+    }
+
+    #[test]
+    fn a_rule_knob_that_keeps_the_scene_rule_takes_no_claim_away() {
+        let step = Knob {
+            key: "pair.0.terraces.step".to_owned(),
+            linked: Vec::new(),
+            label: "ΔV of pair 0".to_owned(),
+            unit: "ε".to_owned(),
+            value: 0.5,
+            choices: Vec::new(),
+        };
+        let choice = |sets: Vec<String>| Choice {
+            label: "rule".to_owned(),
+            recommend: sets.clone(),
+            sets,
+        };
+        let mut keep = choice(step.sets(0.125));
+        keep.recommend = Vec::new();
+        let rule = Knob {
+            key: "pair.0.terraces.step_energy".to_owned(),
+            linked: Vec::new(),
+            label: "level rule of pair 0".to_owned(),
+            unit: String::new(),
+            value: 0.0,
+            choices: vec![
+                choice(vec!["pair.0.terraces.step_energy=\"virial\"".to_owned()]),
+                choice(vec!["pair.0.terraces.step_energy=\"midpoint\"".to_owned()]),
+                choice(vec![
+                    "pair.0.terraces.step_energy=\"volume-average\"".to_owned(),
+                ]),
+                keep,
+            ],
+        };
+        let rows: Vec<Row> = (0..8)
+            .map(|k| {
+                let mut r = row(k / 4, (k % 4) as f64, 1.0, 0.0, 0.0);
+                if k < 4 {
+                    r.value = 0.5 * FACTORS[k];
+                }
+                r
+            })
+            .collect();
+        let mut t = Tuning {
+            knobs: vec![step, rule],
+            rows,
+            target: 0.01,
+            budget: 0.01,
+            recommended: vec![Some(2), Some(7)],
+            certified: vec![[true, false], [false, false]],
+            units: UnitNames::of(crate::config::scene::UnitSystem::Reduced),
+            length: String::new(),
+            smooth: true,
+        };
+        // The ΔV knob's claim stands: the rule knob keeps the scene's rule.
+        assert_eq!(t.certified_all(), [true, false]);
+        assert_eq!(t.recommended_sets(), ["pair.0.terraces.step=0.25"]);
+        // A rule that changes the scene without a claim of its own voids the claim.
+        t.recommended[1] = Some(4);
+        assert_eq!(t.certified_all(), [false, false]);
     }
 
     #[test]
