@@ -1000,10 +1000,15 @@ impl Tuning {
                     let next = &self.rows[finest - 1];
                     let _ = writeln!(
                         out,
-                        "# {}: no coarser setting is within the target at this probe length; the \
-                         finest probed is recommended, and its own error is not known (the next \
-                         coarser differs from it by {}).{}",
+                        "# {}: {} (the next coarser differs from it by {}).{}",
                         knob.label,
+                        if knob.choices.is_empty() {
+                            "no coarser setting is within the target at this probe length; the \
+                             finest probed is recommended, and its own error is not known"
+                        } else {
+                            "no other rule at the scene's ΔV is within the target of the scene's \
+                             rule at the finest ΔV at this probe length: keep the scene's rule"
+                        },
                         next.deviations.map_or("?".to_owned(), |d| {
                             let w = if d[0].bound() >= d[1].bound() {
                                 d[0]
