@@ -33,24 +33,33 @@ pub(crate) fn gas_overrides() -> Vec<String> {
     ]
 }
 
-/// The command line of a validation example: `--quick` (the CI subset) and `--figures DIR`.
+/// The command line of a validation example: `--quick` (the CI subset), `--figures DIR` and
+/// `--case TEXT` (only the cases whose name contains `TEXT`, for examples with several cases:
+/// `validate_tune`).
 pub(crate) struct Args {
     pub(crate) quick: bool,
     pub(crate) figures: PathBuf,
+    pub(crate) case: Option<String>,
 }
 
 fn parse() -> Result<Args, String> {
     let mut quick = false;
     let mut figures = PathBuf::from("target/validate-figures");
+    let mut case = None;
     let mut it = std::env::args().skip(1);
     while let Some(a) = it.next() {
         match a.as_str() {
             "--quick" => quick = true,
             "--figures" => figures = PathBuf::from(it.next().ok_or("--figures needs a folder")?),
+            "--case" => case = Some(it.next().ok_or("--case needs a name")?),
             other => return Err(format!("unknown argument `{other}`")),
         }
     }
-    Ok(Args { quick, figures })
+    Ok(Args {
+        quick,
+        figures,
+        case,
+    })
 }
 
 /// The `main` of a validation example `name`: parses the arguments, runs `validate` in a

@@ -4,13 +4,16 @@
 //! search step of a root-searched model, the smd engine's time step), short probe runs of the
 //! scene at the knob's value times 2, 1, ½ and ¼, the other knobs at the scene's values. Each
 //! probe is an ordinary run ([`run_scene`] or [`smd_engine::run`]) with `--set` overrides for
-//! the knob and a shortened length. The error of a probe is its difference from the finest
+//! the knob and a shortened length. The level rule of a terraced pair (its terrace energies)
+//! is a knob of choices: each other rule at the scene's ΔV against the scene's rule at the
+//! finest ΔV. The error of a probe is its difference from the finest
 //! probe of the same knob in the potential energy per body and the pressure, relative to a
 //! scale (|U/N| of the finest probe; for P the larger of |P| and ρkT, since P may be near
 //! zero), with the uncertainty of that difference from the two runs' own block-average errors
 //! (`_error` of the summary) in quadrature. A setting qualifies when `error + uncertainty` is
 //! within the target. The recommended value of each knob is its cheapest qualifying one, by CPU
-//! seconds of production per unit of simulated time. Knobs are judged one at a time; whether
+//! seconds of production per unit of simulated time; a quantity too noisy at this probe length
+//! to be shown within the target is named as not certified and left out of the judgement. Knobs are judged one at a time; whether
 //! their recommended values together meet the target is what `cargo xtask validate --only
 //! tune` checks on the shipped scenes.
 
@@ -105,17 +108,84 @@ pub struct Knob {
     pub label: String,
     /// Its unit (`kT`, `ps`).
     pub unit: String,
-    /// The scene's value.
+    /// The scene's value (0 for a rule knob).
     pub value: f64,
+    /// A knob of rules rather than of a number (the level rule of a terraced pair): the
+    /// settings probed, the last one the reference. Empty for a numeric knob, whose values
+    /// are the scene's times [`FACTORS`]. A row of a rule knob carries the index of its
+    /// choice as its value.
+    pub choices: Vec<Choice>,
+}
+
+/// One setting of a rule knob.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Choice {
+    /// What it is, for people and the table (`step_energy=virial`).
+    pub label: String,
+    /// The `--set` lines of its probe.
+    pub sets: Vec<String>,
+    /// The `--set` lines to recommend when it is chosen (empty for the reference, which is
+    /// the scene's own rule at a finer ΔV: choosing it keeps the scene's rule, and the ΔV
+    /// knob says which step).
+    pub recommend: Vec<String>,
 }
 
 impl Knob {
-    /// The `--set` lines that give the knob `value`.
+    /// The values probed, coarsest first; the last is the reference.
+    pub fn values(&self) -> Vec<f64> {
+        if self.choices.is_empty() {
+            FACTORS.iter().map(|f| self.value * f).collect()
+        } else {
+            (0..self.choices.len()).map(|k| k as f64).collect()
+        }
+    }
+
+    /// The `--set` lines that give the knob `value` (for a rule knob, the index of a choice:
+    /// its probe's lines).
     pub fn sets(&self, value: f64) -> Vec<String> {
+        if let Some(c) = self.choice(value) {
+            return c.sets.clone();
+        }
         std::iter::once(&self.key)
             .chain(&self.linked)
             .map(|k| format!("{k}={value}"))
             .collect()
+    }
+
+    /// The `--set` lines to paste for `value` (for a rule knob, those of its choice; none
+    /// for the reference, which keeps the scene's rule).
+    pub fn recommend(&self, value: f64) -> Vec<String> {
+        match self.choice(value) {
+            Some(c) => c.recommend.clone(),
+            None => self.sets(value),
+        }
+    }
+
+    /// The `--set` lines of a setting finer than any probed: half the finest value of a
+    /// numeric knob; for a rule knob none (the scene's rule, at the finer ΔV the ΔV knob
+    /// gives).
+    pub fn finer_sets(&self) -> Vec<String> {
+        if self.choices.is_empty() {
+            self.sets(0.5 * self.value * FACTORS[FACTORS.len() - 1])
+        } else {
+            Vec::new()
+        }
+    }
+
+    /// `value` for people: the number with its unit, or the choice's label.
+    pub fn show(&self, value: f64) -> String {
+        match self.choice(value) {
+            Some(c) => c.label.clone(),
+            None => format!("{} {}", short(value), self.unit),
+        }
+    }
+
+    fn choice(&self, value: f64) -> Option<&Choice> {
+        if self.choices.is_empty() {
+            None
+        } else {
+            self.choices.get(value as usize)
+        }
     }
 }
 
@@ -191,10 +261,18 @@ pub struct Row {
 impl Row {
     /// The largest error bound of the selecting observables (infinite for a failed probe).
     pub fn bound(&self) -> f64 {
+        self.bound_of([true, true])
+    }
+
+    /// The largest error bound of the observables `which` selects (U/N, P); infinite for a
+    /// failed probe.
+    pub fn bound_of(&self, which: [bool; 2]) -> f64 {
         // `f64::max` would drop a NaN: an unknown bound must disqualify.
         self.deviations.map_or(f64::INFINITY, |d| {
             d.iter()
-                .map(|d| d.bound())
+                .zip(which)
+                .filter(|(_, w)| *w)
+                .map(|(d, _)| d.bound())
                 .map(|b| if b.is_nan() { f64::INFINITY } else { b })
                 .fold(0.0, f64::max)
         })
@@ -220,6 +298,9 @@ pub struct Tuning {
     pub budget: f64,
     /// The recommended row of each knob (index into `rows`), none if no probe qualified.
     pub recommended: Vec<Option<usize>>,
+    /// For each knob, whether its recommendation certifies U/N and P within the target (both
+    /// false when it recommends its finest probe, whose own error is not known).
+    pub certified: Vec<[bool; 2]>,
     /// Unit names of the scene.
     pub units: &'static UnitNames,
     /// The probe length, for people (`5 ps of production after 5 ps of equilibration`).
@@ -233,11 +314,47 @@ pub struct Tuning {
 /// The cheapest row (by [`Row::cost`]) among `rows` whose bound is within `budget`; among
 /// equally cheap rows the first. `None` if none qualifies.
 pub fn cheapest_within(rows: &[&Row], budget: f64) -> Option<usize> {
+    cheapest_within_of(rows, budget, [true, true])
+}
+
+/// [`cheapest_within`] judging only the observables `which` selects (U/N, P); `None` when it
+/// selects none.
+pub fn cheapest_within_of(rows: &[&Row], budget: f64, which: [bool; 2]) -> Option<usize> {
+    if which == [false, false] {
+        return None;
+    }
     rows.iter()
         .enumerate()
-        .filter(|(_, r)| r.bound() <= budget && r.cost().is_finite())
+        .filter(|(_, r)| r.bound_of(which) <= budget && r.cost().is_finite())
         .min_by(|a, b| a.1.cost().total_cmp(&b.1.cost()))
         .map(|(k, _)| k)
+}
+
+/// Which of U/N and P the probes of one knob (`rows`, the reference last, judged) can show
+/// within `budget`: those whose difference from the reference has a standard error within it
+/// at one coarser probe at least. A quantity noisier than that at this probe length can never
+/// be shown within the target, however close the settings are: the tune names it as not
+/// certified instead of recommending by it.
+pub fn certifiable(rows: &[&Row], budget: f64) -> [bool; 2] {
+    let mut out = [false; 2];
+    for r in &rows[..rows.len().saturating_sub(1)] {
+        if let (Ok(_), Some(d)) = (&r.probe, r.deviations) {
+            for q in 0..2 {
+                out[q] |= d[q].uncertainty <= budget;
+            }
+        }
+    }
+    out
+}
+
+/// The smallest standard error of the difference from the reference of observable `q` (0:
+/// U/N, 1: P) among the coarser probes of one knob (`rows`, the reference last).
+fn best_uncertainty(rows: &[Row], q: usize) -> f64 {
+    rows[..rows.len().saturating_sub(1)]
+        .iter()
+        .filter_map(|r| r.deviations.map(|d| d[q].uncertainty))
+        .filter(|u| u.is_finite())
+        .fold(f64::INFINITY, f64::min)
 }
 
 /// The accuracy knobs of a scene that `dmd tune` varies.
@@ -259,6 +376,7 @@ pub fn knobs(scene: &Scene) -> Result<Vec<Knob>, TuneError> {
             label: "smd time step".to_owned(),
             unit: names.time.to_owned(),
             value: dt,
+            choices: Vec::new(),
         });
         return Ok(knobs);
     }
@@ -272,13 +390,17 @@ pub fn knobs(scene: &Scene) -> Result<Vec<Knob>, TuneError> {
                     // Explicit levels: no single step to scale.
                     (None, None) => continue,
                 };
-                knobs.push(Knob {
+                let step = Knob {
                     key: format!("pair.{k}.terraces.{key}"),
                     linked: Vec::new(),
                     label: format!("ΔV of pair {k}"),
                     unit,
                     value,
-                });
+                    choices: Vec::new(),
+                };
+                let rules = level_rules(scene, k, &step);
+                knobs.push(step);
+                knobs.extend(rules);
             }
             _ if !p.steps.is_empty() && p.steps.iter().any(|s| s[1].is_finite()) => {
                 stepped.push(k);
@@ -306,6 +428,7 @@ pub fn knobs(scene: &Scene) -> Result<Vec<Knob>, TuneError> {
             label: "search step".to_owned(),
             unit: names.time.to_owned(),
             value: step,
+            choices: Vec::new(),
         });
     }
     if scene.has_bonds() {
@@ -319,6 +442,7 @@ pub fn knobs(scene: &Scene) -> Result<Vec<Knob>, TuneError> {
             label: "RATTLE step".to_owned(),
             unit: names.time.to_owned(),
             value: step,
+            choices: Vec::new(),
         });
     }
     if knobs.is_empty() {
@@ -337,6 +461,69 @@ pub fn knobs(scene: &Scene) -> Result<Vec<Knob>, TuneError> {
         return Err(TuneError::NoKnob(why));
     }
     Ok(knobs)
+}
+
+/// The level rules a rule knob compares: the terrace energies of the paper's levels (equal
+/// steps ΔV, 003 Eq. 7), B₂-matched at the scene temperature, the middle of each terrace's
+/// range of `U`, and its shell average. All keep the levels, hence the reach and about the
+/// cost; on the stepped Lennard-Jones fluid at ΔV = ε/2 the B₂-matched energies take the
+/// smooth pressure from 16 % to 2 % of standard MD's (docs/VALIDATION.md, "Convergence of
+/// terraced thermodynamics with ΔV"). Moving the outermost level out to the smooth
+/// potential's switching window was measured too, and is not offered: it costs four times as
+/// much at ε/2 and moves the smooth pressure further away. `(label, step_energy)`.
+const LEVEL_RULES: [(&str, &str); 4] = [
+    ("paper", "equal"),
+    ("B2-matched", "virial"),
+    ("midpoint", "midpoint"),
+    ("shell-averaged", "volume-average"),
+];
+
+/// The rule knob of terraced pair `k` (whose ΔV knob is `step`): every terrace-energy rule of
+/// [`LEVEL_RULES`] other than the scene's, at the scene's ΔV and levels, against the scene's
+/// rule at the finest ΔV probed (the ΔV knob's reference, the same probe). Only for the
+/// Lennard-Jones spheres and rods, whose radial profile the rules other than equal steps
+/// need; none for a scene that gives its levels.
+fn level_rules(scene: &Scene, k: usize, step: &Knob) -> Option<Knob> {
+    use crate::config::scene::{PotentialSpec, StepEnergySpec};
+    let p = &scene.pair[k];
+    let (pot, t) = (p.potential?, p.terraces.as_ref()?);
+    if !matches!(pot, PotentialSpec::LennardJones(_) | PotentialSpec::Rods(_)) || t.levels.is_some()
+    {
+        return None;
+    }
+    let scene_rule = match t.step_energy {
+        StepEnergySpec::Equal => "equal",
+        StepEnergySpec::Midpoint => "midpoint",
+        StepEnergySpec::VolumeAverage => "volume-average",
+        StepEnergySpec::Virial => "virial",
+    };
+    let key = format!("pair.{k}.terraces.step_energy");
+    let mut choices: Vec<Choice> = LEVEL_RULES
+        .iter()
+        .filter(|(_, energy)| *energy != scene_rule)
+        .map(|(label, energy)| {
+            let sets = vec![format!("{key}=\"{energy}\"")];
+            Choice {
+                label: format!("{key}={energy} ({label})"),
+                recommend: sets.clone(),
+                sets,
+            }
+        })
+        .collect();
+    let finest = step.values()[FACTORS.len() - 1];
+    choices.push(Choice {
+        label: format!("scene's rule at {}={}", step.key, short(finest)),
+        sets: step.sets(finest),
+        recommend: Vec::new(),
+    });
+    Some(Knob {
+        key: format!("pair.{k}.terraces.step_energy"),
+        linked: Vec::new(),
+        label: format!("level rule of pair {k}"),
+        unit: String::new(),
+        value: 0.0,
+        choices,
+    })
 }
 
 /// The `--set` lines that shorten a probe: `options.time` or `events`, else a fraction of the
@@ -486,8 +673,11 @@ fn probe(text: &str, base: &Path, overrides: &[String], smooth: bool) -> Result<
 }
 
 /// Fills in the deviations of the rows of knob `knob` (its last row is the reference) and
-/// returns its recommended row.
-fn judge(rows: &mut [Row], budget: f64) -> Option<usize> {
+/// returns its recommended row with the observables (U/N, P) that the recommendation
+/// certifies within the budget: the cheapest row within it in every certifiable observable
+/// ([`certifiable`]); the reference, certifying nothing, when no observable is certifiable or
+/// no coarser row qualifies.
+fn judge(rows: &mut [Row], budget: f64) -> Option<(usize, [bool; 2])> {
     let Some(Ok(reference)) = rows.last().map(|r| r.probe.clone()) else {
         return None;
     };
@@ -508,7 +698,11 @@ fn judge(rows: &mut [Row], budget: f64) -> Option<usize> {
         }
     }
     let refs: Vec<&Row> = rows.iter().collect();
-    cheapest_within(&refs, budget)
+    let which = certifiable(&refs, budget);
+    match cheapest_within_of(&refs, budget, which) {
+        Some(r) if r + 1 < n => Some((r, which)),
+        _ => Some((n - 1, [false, false])),
+    }
 }
 
 /// Tunes the scene at `path`: runs the probes (reporting each through `progress` as
@@ -584,8 +778,7 @@ pub fn tune(
     // Every probe's scene is checked before the first runs.
     let mut plan: Vec<(usize, f64, Vec<String>)> = Vec::new();
     for (k, knob) in knobs.iter().enumerate() {
-        for f in FACTORS {
-            let value = knob.value * f;
+        for value in knob.values() {
             let mut sets = options.overrides.clone();
             sets.extend(shorten.iter().cloned());
             sets.extend(knob.sets(value));
@@ -593,27 +786,40 @@ pub fn tune(
             plan.push((k, value, sets));
         }
     }
-    // The scene's own setting is the same probe for every knob: run it once.
+    // The scene's own setting is the same probe for every numeric knob, and a rule knob's
+    // reference is its ΔV knob's: each distinct probe runs once.
     let mut done: Vec<(Vec<String>, Result<Probe, String>)> = Vec::new();
-    let total = plan.len() - (knobs.len() - 1);
+    let is_scene = |k: usize, value: f64| {
+        let knob: &Knob = &knobs[k];
+        knob.choices.is_empty() && (value - knob.value).abs() <= 1e-12 * knob.value.abs()
+    };
+    let key_of = |k: usize, value: f64, sets: &[String]| {
+        if is_scene(k, value) {
+            Vec::new()
+        } else {
+            sets.to_vec()
+        }
+    };
+    let mut distinct: Vec<Vec<String>> = Vec::new();
+    for (k, value, sets) in &plan {
+        let key = key_of(*k, *value, sets);
+        if !distinct.contains(&key) {
+            distinct.push(key);
+        }
+    }
+    let total = distinct.len();
     let mut rows = Vec::new();
     for (k, value, sets) in plan {
         let knob = &knobs[k];
-        let is_scene = (value - knob.value).abs() <= 1e-12 * knob.value.abs();
-        let shared = if is_scene {
-            done.iter()
-                .find(|(s, _)| s.is_empty())
-                .map(|(_, p)| p.clone())
-        } else {
-            None
-        };
+        let key = key_of(k, value, &sets);
+        let shared = done.iter().find(|(s, _)| *s == key).map(|(_, p)| p.clone());
         let result = match shared {
             Some(p) => p,
             None => {
-                let what = format!("{} = {} {}", knob.key, short(value), knob.unit);
+                let what = format!("{} = {}", knob.key, knob.show(value));
                 progress(done.len(), total, &what);
                 let r = probe(&text, &base, &sets, smooth);
-                let is_ref = value == knob.value * FACTORS[FACTORS.len() - 1];
+                let is_ref = knob.values().last() == Some(&value);
                 let r = match r {
                     Err(e) if is_ref => {
                         return Err(TuneError::Reference {
@@ -623,7 +829,7 @@ pub fn tune(
                     }
                     r => r.map_err(|e| e.to_string()),
                 };
-                done.push((if is_scene { Vec::new() } else { sets }, r.clone()));
+                done.push((key, r.clone()));
                 r
             }
         };
@@ -637,8 +843,14 @@ pub fn tune(
     progress(total, total, "done");
     let budget = options.target;
     let mut recommended = Vec::new();
-    for (k, chunk) in rows.chunks_mut(FACTORS.len()).enumerate() {
-        recommended.push(judge(chunk, budget).map(|r| k * FACTORS.len() + r));
+    let mut certified = Vec::new();
+    let mut first = 0;
+    for k in 0..knobs.len() {
+        let n = rows[first..].iter().take_while(|r| r.knob == k).count();
+        let judged = judge(&mut rows[first..first + n], budget);
+        recommended.push(judged.map(|(r, _)| first + r));
+        certified.push(judged.map_or([false, false], |(_, c)| c));
+        first += n;
     }
     Ok(Tuning {
         knobs,
@@ -646,6 +858,7 @@ pub fn tune(
         target: options.target,
         budget,
         recommended,
+        certified,
         units: UnitNames::of(scene.units),
         length,
         smooth,
@@ -724,7 +937,11 @@ impl Tuning {
         );
         for (k, row) in self.rows.iter().enumerate() {
             let knob = &self.knobs[row.knob];
-            let mut setting = format!("{}={}", knob.key, short(row.value));
+            let mut setting = if knob.choices.is_empty() {
+                format!("{}={}", knob.key, short(row.value))
+            } else {
+                knob.show(row.value)
+            };
             if k + 1 == self.rows.len() || self.rows[k + 1].knob != row.knob {
                 setting.push_str(" (ref)");
             }
@@ -773,17 +990,25 @@ impl Tuning {
             }
         );
         for (k, knob) in self.knobs.iter().enumerate() {
-            let first = k * FACTORS.len();
-            let finest = first + FACTORS.len() - 1;
+            let finest = self
+                .rows
+                .iter()
+                .rposition(|r| r.knob == k)
+                .expect("every knob has rows");
             match self.recommended[k] {
                 Some(r) if r == finest => {
                     let next = &self.rows[finest - 1];
                     let _ = writeln!(
                         out,
-                        "# {}: no coarser setting is within the target at this probe length; the \
-                         finest probed is recommended, and its own error is not known (the next \
-                         coarser differs from it by {}).{}",
+                        "# {}: {} (the next coarser differs from it by {}).{}",
                         knob.label,
+                        if knob.choices.is_empty() {
+                            "no coarser setting is within the target at this probe length; the \
+                             finest probed is recommended, and its own error is not known"
+                        } else {
+                            "no other rule at the scene's ΔV is within the target of the scene's \
+                             rule at the finest ΔV at this probe length: keep the scene's rule"
+                        },
                         next.deviations.map_or("?".to_owned(), |d| {
                             let w = if d[0].bound() >= d[1].bound() {
                                 d[0]
@@ -800,20 +1025,51 @@ impl Tuning {
                             None => String::new(),
                         }
                     );
-                    for s in knob.sets(self.rows[r].value) {
+                    for s in knob.recommend(self.rows[r].value) {
                         let _ = writeln!(out, "--set {s}");
                     }
                 }
                 Some(r) => {
                     let row = &self.rows[r];
-                    for s in knob.sets(row.value) {
+                    let which = self.certified[k];
+                    let first = self
+                        .rows
+                        .iter()
+                        .position(|r| r.knob == k)
+                        .expect("every knob has rows");
+                    for (q, name) in ["U/N", "P"].iter().enumerate() {
+                        if which[q] {
+                            continue;
+                        }
+                        let u = best_uncertainty(&self.rows[first..=finest], q);
                         let _ = writeln!(
                             out,
-                            "--set {s}    # {} {} {}: error ≤ {:.2} %, {:.4} CPU s per {}",
+                            "# {}: {name} is not certified: the standard error of its difference \
+                             from the finest probe is at best {:.2} % at this probe length, above \
+                             the target, so no setting can be shown within it (probes about {:.0} \
+                             times longer would tell); the recommendation rests on {} alone.",
                             knob.label,
-                            short(row.value),
-                            knob.unit,
-                            100.0 * row.bound(),
+                            100.0 * u,
+                            (u / self.budget).powi(2).ceil().max(2.0),
+                            ["U/N", "P"][1 - q]
+                        );
+                    }
+                    let sets = knob.recommend(row.value);
+                    if sets.is_empty() {
+                        let _ = writeln!(out, "# {}: keep the scene's", knob.label);
+                    }
+                    for s in sets {
+                        let _ = writeln!(
+                            out,
+                            "--set {s}    # {} {}: error ≤ {:.2} % in {}, {:.4} CPU s per {}",
+                            knob.label,
+                            knob.show(row.value),
+                            100.0 * row.bound_of(which),
+                            match which {
+                                [true, true] => "U/N and P",
+                                [true, false] => "U/N",
+                                _ => "P",
+                            },
                             row.cost(),
                             self.units.time
                         );
@@ -831,12 +1087,33 @@ impl Tuning {
         out
     }
 
+    /// Whether the recommended settings together are certified in U/N and in P: every knob's
+    /// recommendation that changes the scene certifies it (a rule knob that keeps the
+    /// scene's rule adds no setting, and takes no claim away).
+    pub fn certified_all(&self) -> [bool; 2] {
+        let mut all = [true; 2];
+        for ((knob, c), r) in self
+            .knobs
+            .iter()
+            .zip(&self.certified)
+            .zip(&self.recommended)
+        {
+            let keeps = r.is_some_and(|r| knob.recommend(self.rows[r].value).is_empty());
+            if !knob.choices.is_empty() && keeps {
+                continue;
+            }
+            all[0] &= c[0];
+            all[1] &= c[1];
+        }
+        all
+    }
+
     /// The `--set` lines of the recommended settings.
     pub fn recommended_sets(&self) -> Vec<String> {
         self.knobs
             .iter()
             .zip(&self.recommended)
-            .filter_map(|(knob, r)| r.map(|r| knob.sets(self.rows[r].value)))
+            .filter_map(|(knob, r)| r.map(|r| knob.recommend(self.rows[r].value)))
             .flatten()
             .collect()
     }
@@ -845,7 +1122,10 @@ impl Tuning {
     pub fn reference_sets(&self) -> Vec<String> {
         self.knobs
             .iter()
-            .flat_map(|k| k.sets(k.value * FACTORS[FACTORS.len() - 1]))
+            .flat_map(|k| {
+                let v = k.values();
+                k.recommend(v[v.len() - 1])
+            })
             .collect()
     }
 
@@ -908,7 +1188,12 @@ impl Tuning {
                 d[1].uncertainty,
                 row.bound(),
             ];
-            let _ = write!(csv, "{},{:e}", knob.key, row.value);
+            if knob.choices.is_empty() {
+                let _ = write!(csv, "{},{:e}", knob.key, row.value);
+            } else {
+                // A rule: its label (`pair.0.terraces.step_energy=virial`) and its index.
+                let _ = write!(csv, "{},{:e}", knob.show(row.value), row.value);
+            }
             for c in cells {
                 let _ = write!(csv, ",{c:e}");
             }
@@ -926,13 +1211,13 @@ impl Tuning {
             .iter()
             .enumerate()
             .map(|(k, knob)| {
+                let v = knob.values();
                 Line::new(
                     format!(
-                        "{} ({} … {} {})",
+                        "{} ({} … {})",
                         knob.label,
-                        short(knob.value * FACTORS[0]),
-                        short(knob.value * FACTORS[FACTORS.len() - 1]),
-                        knob.unit
+                        knob.show(v[0]),
+                        knob.show(v[v.len() - 1])
                     ),
                     self.rows
                         .iter()
@@ -1029,6 +1314,116 @@ mod tests {
         let unknown = row(0, 3.0, 0.5, 0.0, f64::NAN);
         let refs: Vec<&Row> = std::iter::once(&unknown).chain(rows.iter()).collect();
         assert_eq!(cheapest_within(&refs, 0.1), Some(1));
+    }
+
+    /// A probe of U/N `u ± 0.001` and P `p ± p_err` at `cost`.
+    fn probe_row(value: f64, u: f64, p: f64, p_err: f64, cost: f64) -> Row {
+        Row {
+            knob: 0,
+            value,
+            probe: Ok(Probe {
+                energy: Measured {
+                    value: u,
+                    error: 0.001,
+                },
+                pressure: Measured {
+                    value: p,
+                    error: p_err,
+                },
+                pressure_ideal: 0.5,
+                diffusion: None,
+                cost,
+            }),
+            deviations: None,
+        }
+    }
+
+    #[test]
+    fn a_quantity_too_noisy_for_the_target_is_not_certified_and_not_judged() {
+        // P carries 2 % errors against a 1 % target: no setting can be shown within it in P.
+        // U/N is certified, and the cheapest setting within 1 % in U/N is recommended.
+        let mut rows = vec![
+            probe_row(1.0, -3.20, 0.40, 0.01, 1.0),
+            probe_row(0.5, -3.145, 0.42, 0.01, 2.0),
+            probe_row(0.25, -3.125, 0.53, 0.01, 4.0),
+            probe_row(0.125, -3.12, 0.53, 0.01, 8.0),
+        ];
+        assert_eq!(judge(&mut rows, 0.01), Some((1, [true, false])));
+        // Every quantity precise enough: both judged, and P's 20 % keeps the coarse rows out.
+        for r in &mut rows {
+            if let Ok(p) = &mut r.probe {
+                p.pressure.error = 0.0001;
+            }
+        }
+        assert_eq!(judge(&mut rows, 0.01), Some((2, [true, true])));
+        // Nothing certifiable: the finest probe, certifying nothing.
+        for r in &mut rows {
+            if let Ok(p) = &mut r.probe {
+                p.pressure.error = 0.01;
+                p.energy.error = 0.1;
+            }
+        }
+        assert_eq!(judge(&mut rows, 0.01), Some((3, [false, false])));
+    }
+
+    #[test]
+    fn a_rule_knob_that_keeps_the_scene_rule_takes_no_claim_away() {
+        let step = Knob {
+            key: "pair.0.terraces.step".to_owned(),
+            linked: Vec::new(),
+            label: "ΔV of pair 0".to_owned(),
+            unit: "ε".to_owned(),
+            value: 0.5,
+            choices: Vec::new(),
+        };
+        let choice = |sets: Vec<String>| Choice {
+            label: "rule".to_owned(),
+            recommend: sets.clone(),
+            sets,
+        };
+        let mut keep = choice(step.sets(0.125));
+        keep.recommend = Vec::new();
+        let rule = Knob {
+            key: "pair.0.terraces.step_energy".to_owned(),
+            linked: Vec::new(),
+            label: "level rule of pair 0".to_owned(),
+            unit: String::new(),
+            value: 0.0,
+            choices: vec![
+                choice(vec!["pair.0.terraces.step_energy=\"virial\"".to_owned()]),
+                choice(vec!["pair.0.terraces.step_energy=\"midpoint\"".to_owned()]),
+                choice(vec![
+                    "pair.0.terraces.step_energy=\"volume-average\"".to_owned(),
+                ]),
+                keep,
+            ],
+        };
+        let rows: Vec<Row> = (0..8)
+            .map(|k| {
+                let mut r = row(k / 4, (k % 4) as f64, 1.0, 0.0, 0.0);
+                if k < 4 {
+                    r.value = 0.5 * FACTORS[k];
+                }
+                r
+            })
+            .collect();
+        let mut t = Tuning {
+            knobs: vec![step, rule],
+            rows,
+            target: 0.01,
+            budget: 0.01,
+            recommended: vec![Some(2), Some(7)],
+            certified: vec![[true, false], [false, false]],
+            units: UnitNames::of(crate::config::scene::UnitSystem::Reduced),
+            length: String::new(),
+            smooth: true,
+        };
+        // The ΔV knob's claim stands: the rule knob keeps the scene's rule.
+        assert_eq!(t.certified_all(), [true, false]);
+        assert_eq!(t.recommended_sets(), ["pair.0.terraces.step=0.25"]);
+        // A rule that changes the scene without a claim of its own voids the claim.
+        t.recommended[1] = Some(4);
+        assert_eq!(t.certified_all(), [false, false]);
     }
 
     #[test]

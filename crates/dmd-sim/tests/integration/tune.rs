@@ -46,7 +46,9 @@ fn tune_writes_its_table_and_recommends_the_cheapest_row_within_the_target() {
     let stdout = String::from_utf8_lossy(&o.stdout).into_owned();
     let stderr = String::from_utf8_lossy(&o.stderr).into_owned();
     assert!(o.status.success(), "{stderr}");
-    assert!(stderr.contains("[7/7]"), "progress on stderr: {stderr}");
+    // ΔV and search step at four values each, three level rules; the scene's setting and the
+    // finest ΔV (the rules' reference) are run once.
+    assert!(stderr.contains("[10/10]"), "progress on stderr: {stderr}");
     assert!(out.join("tune.svg").is_file());
     let csv = std::fs::read_to_string(out.join("tune.csv")).unwrap();
     let mut lines = csv.lines();
@@ -57,8 +59,24 @@ fn tune_writes_its_table_and_recommends_the_cheapest_row_within_the_target() {
     assert!(header.contains(&"cpu_seconds_per_τ (s/τ)"), "{header:?}");
     let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
     let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
-    // Two knobs, four values each, coarsest first.
-    assert_eq!(rows.len(), 8);
+    // Three knobs, four rows each, coarsest first; the level rule's rows are labelled by rule,
+    // its reference is the ΔV knob's.
+    assert_eq!(rows.len(), 12);
+    let rules: Vec<&Vec<&str>> = rows
+        .iter()
+        .filter(|r| r[0].contains("step_energy") || r[0].starts_with("scene's rule"))
+        .collect();
+    assert_eq!(rules.len(), 4, "{rows:?}");
+    assert!(
+        rules[3][0].starts_with("scene's rule at pair.0.terraces.step_kt=0.125"),
+        "{:?}",
+        rules[3]
+    );
+    let step_ref = rows
+        .iter()
+        .find(|r| r[0] == "pair.0.terraces.step_kt" && r[1].parse::<f64>().unwrap() == 0.125)
+        .unwrap();
+    assert_eq!(rules[3][2..7], step_ref[2..7], "the same probe");
     let num = |r: &[&str], c: &str| r[col(c)].parse::<f64>().unwrap();
     for key in ["pair.0.terraces.step_kt", "search.max_step"] {
         let knob: Vec<&Vec<&str>> = rows.iter().filter(|r| r[0] == key).collect();
@@ -153,5 +171,75 @@ fn molecules_are_tuned_in_their_search_and_rattle_steps() {
         k.iter()
             .any(|k| k.key == "search.max_step" && k.value == 0.004),
         "{k:?}"
+    );
+}
+
+/// A terraced pair of Lennard-Jones spheres (or rods) is tuned in its ΔV and in its level rule:
+/// every terrace-energy rule other than the scene's at the scene's ΔV, against the scene's rule
+/// at the finest ΔV probed (the same probe as the ΔV knob's reference).
+#[test]
+fn a_terraced_pair_is_tuned_in_its_step_and_its_level_rule() {
+    use dmd_sim::scene::Scene;
+    use dmd_sim::tune::knobs;
+    let lj = crate::support::scenes_dir().join("stepped-lj.toml");
+    let as_terraces = [
+        "pair.0.steps=".to_owned(),
+        r#"pair.0.potential={kind="lennard-jones", epsilon=1.0, sigma=1.0}"#.to_owned(),
+        "pair.0.terraces={step=0.5, core=10.0}".to_owned(),
+    ];
+    let (scene, _) = Scene::load(&lj, &as_terraces).unwrap();
+    let k = knobs(&scene).unwrap();
+    assert_eq!(k.len(), 2, "{k:?}");
+    assert_eq!(k[0].key, "pair.0.terraces.step");
+    assert_eq!(k[0].values(), [1.0, 0.5, 0.25, 0.125]);
+    let rule = &k[1];
+    assert_eq!(rule.label, "level rule of pair 0");
+    assert_eq!(rule.values(), [0.0, 1.0, 2.0, 3.0]);
+    let sets: Vec<Vec<String>> = rule.values().iter().map(|&v| rule.sets(v)).collect();
+    let energy = |e: &str| vec![format!("pair.0.terraces.step_energy=\"{e}\"")];
+    assert_eq!(
+        sets,
+        [
+            energy("virial"),
+            energy("midpoint"),
+            energy("volume-average"),
+            // The reference is the ΔV knob's.
+            k[0].sets(0.125),
+        ]
+    );
+    // Choosing the reference keeps the scene's rule: nothing to paste for it.
+    assert!(rule.recommend(3.0).is_empty());
+    assert_eq!(rule.recommend(0.0), sets[0]);
+    assert!(rule.finer_sets().is_empty());
+    assert_eq!(k[0].finer_sets(), ["pair.0.terraces.step=0.0625"]);
+    // Every probe is a valid scene.
+    for s in &sets {
+        let mut all = as_terraces.to_vec();
+        all.extend(s.iter().cloned());
+        Scene::load(&lj, &all).unwrap();
+    }
+    // A scene on B₂-matched terraces is offered the paper's equal steps instead of its own.
+    let mut virial = as_terraces.to_vec();
+    virial.push("pair.0.terraces.step_energy=\"virial\"".to_owned());
+    let (scene, _) = Scene::load(&lj, &virial).unwrap();
+    let rule = knobs(&scene).unwrap().pop().unwrap();
+    assert_eq!(rule.sets(0.0), energy("equal"));
+    assert_eq!(rule.values().len(), 4);
+    // Explicit levels are a rule of their own: no rule knob (and no ΔV knob).
+    let mut levels = as_terraces.to_vec();
+    levels.push("pair.0.terraces={levels=[-0.5, 0.5], step_energy=\"midpoint\"}".to_owned());
+    let (scene, _) = Scene::load(&lj, &levels).unwrap();
+    assert!(knobs(&scene).is_err());
+    // The paper's rods: ΔV, the level rule and the search step.
+    let rods = crate::support::scenes_dir().join("rods-paper.toml");
+    let (scene, _) = Scene::load(&rods, &[]).unwrap();
+    let keys: Vec<String> = knobs(&scene).unwrap().into_iter().map(|k| k.key).collect();
+    assert_eq!(
+        keys,
+        [
+            "pair.0.terraces.step_kt",
+            "pair.0.terraces.step_energy",
+            "search.max_step"
+        ]
     );
 }
