@@ -484,11 +484,11 @@ const LEVEL_RULES: [(&str, &str); 4] = [
 /// Lennard-Jones spheres and rods, whose radial profile the rules other than equal steps
 /// need; none for a scene that gives its levels.
 fn level_rules(scene: &Scene, k: usize, step: &Knob) -> Option<Knob> {
-    use crate::config::scene::{PotentialSpec, StepEnergySpec};
+    use crate::config::scene::StepEnergySpec;
     let p = &scene.pair[k];
     let (pot, t) = (p.potential?, p.terraces.as_ref()?);
-    if !matches!(pot, PotentialSpec::LennardJones(_) | PotentialSpec::Rods(_)) || t.levels.is_some()
-    {
+    // The rules other than equal steps need the potential's radial profile.
+    if !pot.describe().has_profile() || t.levels.is_some() {
         return None;
     }
     let scene_rule = match t.step_energy {
