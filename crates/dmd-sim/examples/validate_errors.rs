@@ -95,7 +95,7 @@ const CASES: &[Case] = &[
             "output.vacf={ max_lag = 0.1 }",
         ],
         full: &["run.equilibration_time=10.0", "run.time=32.0"],
-        quick: &["run.equilibration_time=3.0", "run.time=8.0"],
+        quick: &["run.equilibration_time=3.0", "run.time=16.0"],
         quantities: &[
             ("T", "K", "temperature_error", |s| {
                 (s.temperature, s.temperature_error)
