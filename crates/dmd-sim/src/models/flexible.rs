@@ -79,22 +79,19 @@
 
 pub mod rattle;
 
-use collide::{Bond, CollideError, ConstraintSolver, Molecule, Outcome};
+use collide::{Bond, CollideError, ConstraintSolver, Molecule};
 use glam::{DQuat, DVec3};
 use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;
-use root_search::{Adaptive, Crossing, Grid, Method, SearchError};
+use root_search::SearchError;
 
 use crate::engine::event::{Boundary, Kind};
 use crate::engine::model::{Executed, Pair, PairClass, PairModel, PairSetupError, Report};
-use crate::engine::pair_state::{SavedSearches, SiteLevels};
 use crate::engine::potential::Potentials;
 use crate::engine::saved::{StateReader, push_count};
-use crate::models::search::{
-    SearchMethod, SearchSettings, SearchStats, bracket, check_settings, jitter_factor, mix,
-};
-use crate::models::site_pairs::{Band, SITE_OVERLAP_TOLERANCE, SiteAtom, SiteSearch};
+use crate::models::search::{SearchSettings, SearchStats, check_settings, mix};
+use crate::models::site_pairs::{Pending, SiteAtom, SiteDistance, SiteSearch, SiteTable};
 
 pub use rattle::{Constraints, RattleError, Trajectory};
 
@@ -504,58 +501,19 @@ impl FlexStats {
     }
 }
 
-/// What a prediction left for its pair.
-#[derive(Clone, Debug, PartialEq)]
-enum Pending {
-    /// The molecules come within reach then: set up every site pair.
-    Later,
-    /// Per site pair, in the order of the pair's site-pair table.
-    Sites(Vec<SiteSearch>),
-    /// The pair event is for site pair `k` at `boundary`.
-    Fire(u32, Boundary),
-    /// A RATTLE step of one of the molecules failed: the pair's event, due at once, reports it
-    /// (the loop stops with the error instead of running on without the pair's events).
-    Broken,
-}
-
-/// One site pair of a pair of molecule types.
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct SitePair {
-    a: u16,
-    b: u16,
-    potential: u32,
-    /// `ρ_α + ρ_β`.
-    arms: f64,
-}
-
-/// The site pairs of one ordered pair of molecule types.
-#[derive(Clone, Debug, PartialEq)]
-struct TypePair {
-    pairs: Vec<SitePair>,
-    reach: f64,
-}
-
 /// Semi-flexible molecules with stepped site–site potentials (module documentation).
 #[derive(Debug)]
 pub struct Flexible {
     types: Vec<FlexibleType>,
     constraints: Vec<Constraints>,
-    potentials: Potentials,
-    type_pairs: Vec<TypePair>,
-    body_type: Vec<u32>,
+    /// Site pairs, their levels and searches, and the molecules' types.
+    table: SiteTable,
     trajectories: Vec<Trajectory>,
-    levels: SiteLevels,
-    pending: SavedSearches<Pending>,
-    settings: SearchSettings,
     rattle: RattleSettings,
     solver: ConstraintSolver,
-    /// The key of the search steps' jitter ([`jitter_factor`]).
-    jitter_key: u64,
-    stats: SearchStats,
     flex: FlexStats,
     /// Kinetic energy the integration brought in at events, not yet taken by the loop.
     kinetic_error: f64,
-    reach: f64,
 }
 
 /// Mutable references to two different elements.
@@ -613,30 +571,6 @@ impl Flexible {
             .iter()
             .map(|t| Constraints::new(&t.masses, &t.bonds, &t.lengths, rattle.tolerance))
             .collect();
-        let mut type_pairs = Vec::with_capacity(types.len() * types.len());
-        for ti in &types {
-            for tj in &types {
-                let mut pairs = Vec::new();
-                let mut reach: f64 = 0.0;
-                for (a, (&sa, &ra)) in ti.species.iter().zip(&ti.radii).enumerate() {
-                    for (b, (&sb, &rb)) in tj.species.iter().zip(&tj.radii).enumerate() {
-                        let k = potentials.index(sa, sb);
-                        reach = reach.max(potentials.all()[k].reach() + ra + rb);
-                        pairs.push(SitePair {
-                            a: a as u16,
-                            b: b as u16,
-                            potential: k as u32,
-                            arms: ra + rb,
-                        });
-                    }
-                }
-                type_pairs.push(TypePair {
-                    pairs,
-                    reach: reach * (1.0 + 1e-12),
-                });
-            }
-        }
-        let reach = type_pairs.iter().map(|p| p.reach).fold(0.0, f64::max);
         if positions.len() != body_type.len() || velocities.len() != body_type.len() {
             return Err(FlexibleError::Body {
                 body: positions.len().min(velocities.len()),
@@ -683,24 +617,22 @@ impl Flexible {
                 .map_err(|e| body(e.to_string()))?;
             trajectories.push(Trajectory::new(t0, rattle.step, &q, &u));
         }
-        let n = body_type.len();
+        let table = SiteTable::new(
+            types.iter().map(|t| (&t.species[..], &t.radii[..])),
+            potentials,
+            body_type,
+            settings,
+            mix(seed ^ 0xf1e8_0000_0000_0013),
+        );
         Ok(Flexible {
             types,
             constraints,
-            potentials,
-            type_pairs,
-            body_type: body_type.to_vec(),
+            table,
             trajectories,
-            levels: SiteLevels::default(),
-            pending: SavedSearches::new(n),
-            settings,
             rattle,
             solver: ConstraintSolver::new(),
-            jitter_key: mix(seed ^ 0xf1e8_0000_0000_0013),
-            stats: SearchStats::default(),
             flex: FlexStats::default(),
             kinetic_error: 0.0,
-            reach,
         })
     }
 
@@ -716,7 +648,7 @@ impl Flexible {
 
     /// Counters of this model's root searches so far.
     pub fn search_stats(&self) -> SearchStats {
-        self.stats
+        self.table.stats
     }
 
     /// What the RATTLE side did so far.
@@ -741,7 +673,7 @@ impl Flexible {
         i: u32,
         now: f64,
     ) -> Result<(Vec<DVec3>, Vec<DVec3>), RattleError> {
-        let ty = self.body_type[i as usize] as usize;
+        let ty = self.table.type_of(i);
         self.trajectories[i as usize].peek(&self.constraints[ty], now)
     }
 
@@ -750,7 +682,7 @@ impl Flexible {
     pub fn bond_error(&self, now: f64) -> f64 {
         let mut worst: f64 = 0.0;
         for (i, t) in self.trajectories.iter().enumerate() {
-            let c = &self.constraints[self.body_type[i] as usize];
+            let c = &self.constraints[self.table.type_of(i as u32)];
             worst = worst.max(c.violation(t.initial().0));
             match self.internal_state(i as u32, now) {
                 Ok((q, _)) => worst = worst.max(c.violation(&q)),
@@ -762,167 +694,51 @@ impl Flexible {
 
     /// The stored level of site `a` of `i` with site `b` of `j`.
     pub fn site_level(&self, i: u32, j: u32, a: usize, b: usize) -> u16 {
-        self.levels.get(i, j, a, b, self.sizes(i, j))
+        self.table.site_level(i, j, a, b)
     }
 
-    #[inline]
-    fn n_sites(&self, i: u32) -> usize {
-        self.types[self.body_type[i as usize] as usize].masses.len()
-    }
-
-    /// The site counts of `i` and `j`.
-    #[inline]
-    fn sizes(&self, i: u32, j: u32) -> (usize, usize) {
-        (self.n_sites(i), self.n_sites(j))
-    }
-
-    fn store_level(&mut self, i: u32, j: u32, a: usize, b: usize, level: u16) {
-        let sizes = self.sizes(i, j);
-        self.levels.set(i, j, a, b, sizes, level);
-    }
-
-    /// All site-pair levels of `(i, j)` in the order of the type pair's table (`α`-major for
-    /// `i`).
-    fn pair_levels(&self, i: u32, j: u32) -> Vec<u16> {
-        self.levels.pair(i, j, self.sizes(i, j))
-    }
-
-    #[inline]
-    fn type_pair(&self, i: u32, j: u32) -> usize {
-        self.body_type[i as usize] as usize * self.types.len() + self.body_type[j as usize] as usize
-    }
-
-    /// Brackets every site pair of `(i, j)` by the bounding spheres and searches those due.
-    fn start_sites(
-        &mut self,
-        i: u32,
-        j: u32,
-        now: f64,
-        dr: DVec3,
-        dv: DVec3,
-    ) -> Option<(f64, Kind)> {
-        let tp = self.type_pair(i, j);
-        let levels = self.pair_levels(i, j);
-        let mut sites = Vec::with_capacity(levels.len());
-        for (k, &level) in levels.iter().enumerate() {
-            let sp = self.type_pairs[tp].pairs[k];
-            let lv = self.potentials.all()[sp.potential as usize].levels()[level as usize];
-            let radius = if lv.outer2 < f64::INFINITY {
-                lv.outer2.sqrt()
-            } else {
-                lv.inner2.sqrt()
-            };
-            let r = (radius + sp.arms) * (1.0 + 1e-12);
-            sites.push(match bracket(dr, dv, r * r) {
-                None => SiteSearch::Done,
-                Some((a, b)) if a.is_nan() || b.is_nan() => {
-                    self.stats.failures += 1;
-                    SiteSearch::Done
-                }
-                Some((a, b)) => SiteSearch::Deferred {
-                    at: now + a,
-                    end: now + b,
-                },
-            });
-        }
-        self.advance(i, j, now, dr, dv, sites, true)
-    }
-
-    /// Runs every site pair whose search is due up to `now + window`, then picks the pair's
-    /// next event (as `sites`).
-    #[allow(clippy::too_many_arguments)]
-    fn advance(
-        &mut self,
-        i: u32,
-        j: u32,
-        now: f64,
-        dr: DVec3,
-        dv: DVec3,
+    /// Runs every site pair of `pair` whose search is due (on the RATTLE trajectories), then
+    /// picks the pair's next event ([`SiteTable::choose`]); a failed RATTLE step makes it due
+    /// at once.
+    fn search(
+        table: &mut SiteTable,
+        (trajectories, constraints, flex): (&mut [Trajectory], &[Constraints], &mut FlexStats),
+        pair: &Pair,
         mut sites: Vec<SiteSearch>,
         fresh: bool,
     ) -> Option<(f64, Kind)> {
-        let tp = self.type_pair(i, j);
-        let levels = self.pair_levels(i, j);
-        let until = now + self.settings.window;
-        let (ti, tj) = (
-            self.body_type[i as usize] as usize,
-            self.body_type[j as usize] as usize,
-        );
+        let Pair {
+            i, j, now, dr, dv, ..
+        } = *pair;
+        let (ti, tj) = (table.type_of(i), table.type_of(j));
         // Steps behind the present are not needed again.
-        self.trajectories[i as usize].trim(now);
-        self.trajectories[j as usize].trim(now);
-        let before: usize = self.trajectories[i as usize].computed_steps()
-            + self.trajectories[j as usize].computed_steps();
+        trajectories[i as usize].trim(now);
+        trajectories[j as usize].trim(now);
+        let before: usize =
+            trajectories[i as usize].computed_steps() + trajectories[j as usize].computed_steps();
         {
-            let (traj_i, traj_j) = two(&mut self.trajectories, i as usize, j as usize);
-            let mut geo = Geometry {
-                i,
-                j,
+            let (traj_i, traj_j) = two(trajectories, i as usize, j as usize);
+            let mut geo = FlexGeometry {
                 traj_i,
                 traj_j,
-                ci: &self.constraints[ti],
-                cj: &self.constraints[tj],
+                ci: &constraints[ti],
+                cj: &constraints[tj],
                 dr,
                 dv,
                 now,
             };
-            let mut search = Searcher {
-                settings: &self.settings,
-                stats: &mut self.stats,
-                key: self.jitter_key,
-            };
-            for k in 0..sites.len() {
-                let due = match sites[k] {
-                    SiteSearch::Deferred { at, .. } => at <= now,
-                    SiteSearch::Suspended(s) => s.time() <= now || !fresh,
-                    _ => false,
-                };
-                if !due {
-                    continue;
-                }
-                let sp = self.type_pairs[tp].pairs[k];
-                let lv = self.potentials.all()[sp.potential as usize].levels()[levels[k] as usize];
-                sites[k] = search.site(
-                    &mut geo,
-                    k as u32,
-                    (sp.a as usize, sp.b as usize),
-                    Band::of(&lv),
-                    sites[k],
-                    until,
-                );
-            }
+            table.search_due(&mut geo, (i, j), now, &mut sites, fresh);
         }
-        let after: usize = self.trajectories[i as usize].computed_steps()
-            + self.trajectories[j as usize].computed_steps();
-        self.flex.steps += after.saturating_sub(before) as u64;
-        if self.trajectories[i as usize].failure().is_some()
-            || self.trajectories[j as usize].failure().is_some()
+        let after: usize =
+            trajectories[i as usize].computed_steps() + trajectories[j as usize].computed_steps();
+        flex.steps += after.saturating_sub(before) as u64;
+        if trajectories[i as usize].failure().is_some()
+            || trajectories[j as usize].failure().is_some()
         {
-            self.pending.set(i, j, now, Pending::Broken);
+            table.save(i, j, now, Pending::Broken);
             return Some((0.0, Kind::Pair(Boundary::Inner)));
         }
-        let mut root = (f64::INFINITY, 0usize, Boundary::Inner);
-        let mut wait = f64::INFINITY;
-        for (k, s) in sites.iter().enumerate() {
-            match *s {
-                SiteSearch::Root(t, b) if t < root.0 => root = (t, k, b),
-                SiteSearch::Suspended(st) => wait = wait.min(st.time()),
-                SiteSearch::Deferred { at, .. } => wait = wait.min(at),
-                _ => {}
-            }
-        }
-        if root.0 <= wait && root.0 < f64::INFINITY {
-            let dt = root.0 - now;
-            self.pending
-                .set(i, j, now + dt, Pending::Fire(root.1 as u32, root.2));
-            return Some((dt, Kind::Pair(root.2)));
-        }
-        if wait < f64::INFINITY {
-            let dt = (wait - now).max(0.0);
-            self.pending.set(i, j, now + dt, Pending::Sites(sites));
-            return Some((dt, Kind::Virtual));
-        }
-        None
+        table.choose(i, j, now, sites)
     }
 
     /// Starts molecule `i` afresh at `now` from internal positions `q` (kept as they are: the
@@ -937,7 +753,7 @@ impl Flexible {
         mut u: Vec<DVec3>,
         keep: bool,
     ) -> Result<f64, RattleError> {
-        let ty = self.body_type[i as usize] as usize;
+        let ty = self.table.type_of(i);
         let c = &self.constraints[ty];
         let t = &self.types[ty];
         self.flex.interpolated_bond_error = self.flex.interpolated_bond_error.max(c.violation(&q));
@@ -964,7 +780,7 @@ impl Flexible {
         if !self.rattle.rescale {
             return;
         }
-        let t = &self.types[self.body_type[i] as usize];
+        let t = &self.types[self.table.type_of(i as u32)];
         let (k, target) = (kinetic(&t.masses, u), self.internal_kinetic(i));
         if k > 0.0 {
             let f = (target / k).sqrt();
@@ -976,7 +792,7 @@ impl Flexible {
 
     /// Internal kinetic energy of molecule `i` at its last change.
     fn internal_kinetic(&self, i: usize) -> f64 {
-        let t = &self.types[self.body_type[i] as usize];
+        let t = &self.types[self.table.type_of(i as u32)];
         kinetic(&t.masses, self.trajectories[i].initial().1)
     }
 
@@ -991,7 +807,7 @@ impl Flexible {
         kt: f64,
         rng: &mut Xoshiro256PlusPlus,
     ) -> Result<f64, RattleError> {
-        let ty = self.body_type[i as usize] as usize;
+        let ty = self.table.type_of(i);
         let before = self.internal_kinetic(i as usize);
         let (q, _) = self.trajectories[i as usize].state_at(&self.constraints[ty], now)?;
         let u = draw_velocities(&self.types[ty], kt, rng);
@@ -1046,10 +862,7 @@ pub fn random_internal(
 }
 
 /// The two molecules of a pair and their relative centre motion: what the indicators need.
-struct Geometry<'a> {
-    /// The pair (it keys the jitter).
-    i: u32,
-    j: u32,
+struct FlexGeometry<'a> {
     traj_i: &'a mut Trajectory,
     traj_j: &'a mut Trajectory,
     ci: &'a Constraints,
@@ -1059,11 +872,10 @@ struct Geometry<'a> {
     now: f64,
 }
 
-impl Geometry<'_> {
-    /// `d²` of atoms `(a, b)` at `t` and its rate `2 r·u` (NaN if a RATTLE step failed, which
-    /// the root search reports as a failure).
+impl SiteDistance for FlexGeometry<'_> {
+    /// On the RATTLE trajectories (NaN if a step failed).
     #[inline]
-    fn distance2(&mut self, (a, b): (usize, usize), t: f64) -> (f64, f64) {
+    fn distance2(&mut self, a: usize, b: usize, t: f64) -> (f64, f64) {
         match (
             self.traj_i.atom_at(self.ci, t, a),
             self.traj_j.atom_at(self.cj, t, b),
@@ -1078,125 +890,6 @@ impl Geometry<'_> {
     }
 }
 
-/// The search side of the model, borrowed apart from the trajectories.
-struct Searcher<'a> {
-    settings: &'a SearchSettings,
-    stats: &'a mut SearchStats,
-    /// The key of the search steps' jitter ([`jitter_factor`]).
-    key: u64,
-}
-
-impl Searcher<'_> {
-    /// Starts or continues the search of site pair `atoms` on band `band` up to `until` (as
-    /// `sites`, on the RATTLE trajectory).
-    fn site(
-        &mut self,
-        geo: &mut Geometry,
-        k: u32,
-        atoms: (usize, usize),
-        band: Band,
-        from: SiteSearch,
-        until: f64,
-    ) -> SiteSearch {
-        let (t0, end) = match from {
-            SiteSearch::Deferred { at, end } => (at.max(geo.now), end),
-            SiteSearch::Suspended(s) => (s.time(), s.end()),
-            other => return other,
-        };
-        if let SiteSearch::Deferred { .. } = from {
-            // A search that starts with its pair off the stored level has missed an event.
-            let (d2, rate) = geo.distance2(atoms, t0);
-            let tol = 1e-7 * band.scale;
-            if d2 < band.lo - tol || d2 > band.hi + tol {
-                self.stats.off_terrace += 1;
-            }
-            if let Some(boundary) = band.leaving(d2, rate) {
-                self.stats.roots += 1;
-                return SiteSearch::Root(t0, boundary);
-            }
-        }
-        let key = mix(self.key ^ u64::from(k));
-        let jitter = jitter_factor(self.settings.jitter, key, geo.i, geo.j, t0);
-        let step = self.settings.max_step * jitter;
-        let horizon = if until == f64::INFINITY && end == f64::INFINITY {
-            t0 + 1e4 * self.settings.max_step
-        } else {
-            until
-        };
-        let window = (horizon - t0).max(f64::MIN_POSITIVE);
-        let mut evals = 0u32;
-        let mut indicator = |t: f64| -> (f64, f64) {
-            evals += 1;
-            let (d2, rate) = geo.distance2(atoms, t);
-            band.indicator(d2, rate)
-        };
-        let result = match (self.settings.method, from) {
-            (SearchMethod::Adaptive, SiteSearch::Suspended(s)) => {
-                Adaptive::new(step).and_then(|m| m.resume(&mut indicator, s, window))
-            }
-            (SearchMethod::Adaptive, _) => Adaptive::new(step)
-                .and_then(|m| m.start(&mut indicator, t0, end, Crossing::Falling, window)),
-            (SearchMethod::Grid { threshold }, SiteSearch::Suspended(s)) => {
-                Grid::new(step, threshold).and_then(|m| m.resume(&mut indicator, s, window))
-            }
-            (SearchMethod::Grid { threshold }, _) => Grid::new(step, threshold)
-                .and_then(|m| m.start(&mut indicator, t0, end, Crossing::Falling, window)),
-        };
-        self.stats.searches += 1;
-        self.stats.evaluations += u64::from(evals);
-        let Ok(report) = result else {
-            self.stats.failures += 1;
-            return SiteSearch::Done;
-        };
-        let checked_to = match report.outcome {
-            root_search::Outcome::Root(r) => r.t,
-            root_search::Outcome::Suspended(s) => s.time(),
-            root_search::Outcome::NoRoot => end,
-        };
-        if let Some(fine) = self.settings.verify_step {
-            self.stats.verified += 1;
-            let mut reference = |t: f64| -> (f64, f64) {
-                let (d2, rate) = geo.distance2(atoms, t);
-                band.indicator(d2, rate)
-            };
-            let found = Grid::new(fine, f64::INFINITY).and_then(|g| {
-                g.start(
-                    &mut reference,
-                    t0,
-                    checked_to.min(t0 + 1e4 * self.settings.max_step),
-                    Crossing::Falling,
-                    f64::INFINITY,
-                )
-            });
-            if let Ok(rep) = found
-                && let Some(tg) = rep.root()
-                && tg < checked_to - 1e-6 * self.settings.max_step
-            {
-                self.stats.verify_misses += 1;
-            }
-        }
-        match report.outcome {
-            root_search::Outcome::Root(r) => {
-                self.stats.roots += 1;
-                let (d2, _) = geo.distance2(atoms, r.t);
-                let boundary = if band.hi == f64::INFINITY
-                    || (band.lo > 0.0 && (d2 - band.lo).abs() < (band.hi - d2).abs())
-                {
-                    Boundary::Inner
-                } else {
-                    Boundary::Outer
-                };
-                SiteSearch::Root(r.t, boundary)
-            }
-            root_search::Outcome::Suspended(s) => {
-                self.stats.suspended += 1;
-                SiteSearch::Suspended(s)
-            }
-            root_search::Outcome::NoRoot => SiteSearch::Done,
-        }
-    }
-}
-
 /// The error an impulse reports for a molecule whose RATTLE trajectory broke.
 const BROKEN: CollideError = CollideError::FreeMotion(
     "a RATTLE step of a semi-flexible molecule failed (a bond turned by about a right angle \
@@ -1205,7 +898,7 @@ const BROKEN: CollideError = CollideError::FreeMotion(
 
 impl PairModel for Flexible {
     fn reach(&self) -> f64 {
-        self.reach
+        self.table.reach()
     }
 
     fn n_species(&self) -> usize {
@@ -1218,56 +911,35 @@ impl PairModel for Flexible {
 
     fn setup_pair(&mut self, pair: &Pair) -> Result<(), PairSetupError> {
         let Pair { i, j, dr, .. } = *pair;
-        let tp = self.type_pair(i, j);
-        let (qi, qj) = (
-            self.trajectories[i as usize].initial().0.to_vec(),
-            self.trajectories[j as usize].initial().0.to_vec(),
-        );
-        for k in 0..self.type_pairs[tp].pairs.len() {
-            let sp = self.type_pairs[tp].pairs[k];
-            let pot = &self.potentials.all()[sp.potential as usize];
-            let d = (dr + qi[sp.a as usize] - qj[sp.b as usize]).length();
-            if let Some(core) = pot.core()
-                && d < core
-            {
-                return Err(PairSetupError::Overlap { distance: d, core });
-            }
-            let level = pot.level_at(d);
-            if level > 0 {
-                self.store_level(i, j, sp.a as usize, sp.b as usize, level as u16);
-            }
-        }
-        Ok(())
+        self.table.setup(
+            i,
+            j,
+            dr,
+            self.trajectories[i as usize].initial().0,
+            self.trajectories[j as usize].initial().0,
+        )
     }
 
     fn predict(&mut self, pair: &Pair) -> Option<(f64, Kind)> {
-        let Pair {
-            i, j, now, dr, dv, ..
-        } = *pair;
-        let tp = self.type_pair(i, j);
-        let reach = self.type_pairs[tp].reach;
-        let (start, _) = bracket(dr, dv, reach * reach)?;
-        if start.is_nan() {
-            self.stats.failures += 1;
-            return None;
-        }
-        if start > 0.0 {
-            self.stats.deferred += 1;
-            self.pending.set(i, j, now + start, Pending::Later);
-            return Some((start, Kind::Virtual));
-        }
-        self.start_sites(i, j, now, dr, dv)
+        let motion = (
+            &mut self.trajectories[..],
+            &self.constraints[..],
+            &mut self.flex,
+        );
+        self.table.predict(pair, |table, sites, fresh| {
+            Self::search(table, motion, pair, sites, fresh)
+        })
     }
 
     fn resume(&mut self, pair: &Pair) -> Option<(f64, Kind)> {
-        let Pair {
-            i, j, now, dr, dv, ..
-        } = *pair;
-        match self.pending.take(i, j, now)? {
-            Pending::Later => self.start_sites(i, j, now, dr, dv),
-            Pending::Sites(sites) => self.advance(i, j, now, dr, dv, sites, false),
-            Pending::Fire(..) | Pending::Broken => None,
-        }
+        let motion = (
+            &mut self.trajectories[..],
+            &self.constraints[..],
+            &mut self.flex,
+        );
+        self.table.resume(pair, |table, sites, fresh| {
+            Self::search(table, motion, pair, sites, fresh)
+        })
     }
 
     fn execute(
@@ -1284,18 +956,13 @@ impl PairModel for Flexible {
             virial: 0.0,
             overlap,
         };
-        let (k, boundary) = match self.pending.take(i, j, now) {
-            Some(Pending::Fire(k, boundary)) => (k, boundary),
-            Some(Pending::Broken) => return Err(BROKEN),
-            _ => return Ok(skipped(false)),
+        let fired = match self.table.fire(i, j, now) {
+            Ok(Some(fired)) => fired,
+            Ok(None) => return Ok(skipped(false)),
+            Err(()) => return Err(BROKEN),
         };
-        let tp = self.type_pair(i, j);
-        let sp = self.type_pairs[tp].pairs[k as usize];
-        let (a, b) = (sp.a as usize, sp.b as usize);
-        let (ti, tj) = (
-            self.body_type[i as usize] as usize,
-            self.body_type[j as usize] as usize,
-        );
+        let (a, b) = (fired.a, fired.b);
+        let (ti, tj) = (self.table.type_of(i), self.table.type_of(j));
         // The atoms exactly as the search saw them.
         let (qi, mut ui) = self.trajectories[i as usize]
             .state_at(&self.constraints[ti], now)
@@ -1306,22 +973,12 @@ impl PairModel for Flexible {
         self.rescale(i as usize, &mut ui);
         self.rescale(j as usize, &mut uj);
         let n = dr + qi[a] - qj[b];
-        let level = self.site_level(i, j, a, b);
-        let pot = &self.potentials.all()[sp.potential as usize];
-        let lv = pot.levels()[level as usize];
-        let rate = n.dot((*vi + ui[a]) - (*vj + uj[b]));
-        let (radius2, step, right_way) = match boundary {
-            Boundary::Inner => (lv.inner2, lv.dv_in, rate < 0.0),
-            Boundary::Outer => (lv.outer2, lv.dv_out, rate > 0.0),
-        };
-        let d2 = n.length_squared();
-        let tol = 1e-9 * radius2 + 2.0 * 8.0 * rate.abs() * 1e-10 * self.settings.max_step;
-        if (d2 - radius2).abs() > tol || d2.is_nan() {
-            self.stats.misfits += 1;
-        }
-        let overlap = step == f64::INFINITY && d2 < radius2 * (1.0 - SITE_OVERLAP_TOLERANCE);
-        if !right_way {
-            return Ok(skipped(overlap));
+        let judged = self
+            .table
+            .judge(&fired, n, n.dot((*vi + ui[a]) - (*vj + uj[b])));
+        let step = judged.step;
+        if !judged.right_way {
+            return Ok(skipped(judged.overlap));
         }
         // Lab positions relative to j's centre, lab velocities.
         let pos_i: Vec<DVec3> = qi.iter().map(|&x| dr + x).collect();
@@ -1365,23 +1022,11 @@ impl PairModel for Flexible {
         // What the loop does not see: the change beyond −ΔU (the RATTLE step's energy error
         // between the starts and now, and the projection).
         self.kinetic_error += counted(self, new_vi, new_vj) - before + imp.delta_v;
-        let class = match (imp.outcome, boundary) {
-            (Outcome::Reflected, _) if step == f64::INFINITY => PairClass::Core,
-            (Outcome::Reflected, _) => PairClass::StepReflect,
-            (Outcome::Crossed, Boundary::Inner) => {
-                self.store_level(i, j, a, b, level + 1);
-                PairClass::StepIn
-            }
-            (Outcome::Crossed, Boundary::Outer) => {
-                self.store_level(i, j, a, b, level - 1);
-                PairClass::StepOut
-            }
-        };
         Ok(Executed {
-            class,
+            class: self.table.settle(i, j, &fired, imp.outcome, step),
             delta_u: imp.delta_v,
             virial: imp.s * dr.dot(n),
-            overlap,
+            overlap: judged.overlap,
         })
     }
 
@@ -1408,16 +1053,7 @@ impl PairModel for Flexible {
         else {
             return (0, f64::INFINITY);
         };
-        let tp = self.type_pair(i, j);
-        let mut e = 0.0;
-        for sp in &self.type_pairs[tp].pairs {
-            let pot = &self.potentials.all()[sp.potential as usize];
-            let d = (dr + qi[sp.a as usize] - qj[sp.b as usize]).length();
-            let held = self.site_level(i, j, sp.a as usize, sp.b as usize) as usize;
-            let level = pot.true_level(held, d);
-            e += pot.levels()[level].energy;
-        }
-        (0, e)
+        (0, self.table.configured_energy(i, j, dr, &qi, &qj))
     }
 
     fn extra_state(&self) -> Vec<f64> {
@@ -1425,8 +1061,7 @@ impl PairModel for Flexible {
         for t in &self.trajectories {
             t.write_numbers(&mut x);
         }
-        self.levels.write_numbers(&mut x);
-        self.stats.write_numbers(&mut x);
+        self.table.write_numbers(&mut x);
         let f = &self.flex;
         push_count(&mut x, f.steps);
         push_count(&mut x, f.restarts);
@@ -1442,24 +1077,14 @@ impl PairModel for Flexible {
     fn set_extra_state(&mut self, state: &[f64]) -> Result<(), String> {
         let mut r = StateReader::new(state);
         let mut trajectories = Vec::with_capacity(self.trajectories.len());
-        for (i, &ty) in self.body_type.iter().enumerate() {
+        for (i, &ty) in self.table.body_type.iter().enumerate() {
             let atoms = self.types[ty as usize].masses.len();
             trajectories.push(
                 Trajectory::read_numbers(&mut r, self.rattle.step, atoms)
                     .map_err(|e| format!("molecule {i}: {e}"))?,
             );
         }
-        let n = self.body_type.len() as u32;
-        let levels = SiteLevels::read_numbers(
-            &mut r,
-            n,
-            |i, j| self.type_pairs[self.type_pair(i, j)].pairs.len(),
-            |i, j, k| {
-                let sp = self.type_pairs[self.type_pair(i, j)].pairs[k];
-                self.potentials.all()[sp.potential as usize].levels().len()
-            },
-        )?;
-        let stats = SearchStats::read_numbers(&mut r)?;
+        let table = self.table.read_numbers(&mut r)?;
         let flex = FlexStats {
             steps: r.count("rattle.steps")?,
             restarts: r.count("rattle.restarts")?,
@@ -1470,25 +1095,14 @@ impl PairModel for Flexible {
         let kinetic_error = r.real("the kinetic energy error")?;
         r.finish()?;
         self.trajectories = trajectories;
-        self.levels = levels;
-        self.stats = stats;
+        self.table.commit(table);
         self.flex = flex;
         self.kinetic_error = kinetic_error;
         Ok(())
     }
 
     fn pair_energy(&self, i: u32, j: u32, _si: u32, _sj: u32) -> f64 {
-        let Some(l) = self.levels.stored(i, j) else {
-            return 0.0;
-        };
-        let tp = self.type_pair(i.min(j), i.max(j));
-        let mut e = 0.0;
-        for (k, sp) in self.type_pairs[tp].pairs.iter().enumerate() {
-            if l[k] != 0 {
-                e += self.potentials.all()[sp.potential as usize].levels()[l[k] as usize].energy;
-            }
-        }
-        e
+        self.table.pair_energy(i, j)
     }
 
     fn check_pair(&self, pair: &Pair, listed: bool) -> Result<(), String> {
@@ -1499,42 +1113,12 @@ impl PairModel for Flexible {
         let (qj, _) = self
             .internal_state(j, now)
             .map_err(|e| format!("molecule {j}: {e}"))?;
-        let tp = self.type_pair(i, j);
-        for sp in &self.type_pairs[tp].pairs {
-            let pot = &self.potentials.all()[sp.potential as usize];
-            let (a, b) = (sp.a as usize, sp.b as usize);
-            let d = (dr + qi[a] - qj[b]).length();
-            if d < pot.reach() && !listed {
-                return Err(format!(
-                    "sites {a} of {i} and {b} of {j} interact at {d} but the pair is not listed"
-                ));
-            }
-            if let Some(core) = pot.core()
-                && d * d < core * core * (1.0 - SITE_OVERLAP_TOLERANCE)
-            {
-                return Err(format!(
-                    "site {a} of {i} and site {b} of {j} overlap: distance {d} < {core}"
-                ));
-            }
-            let stored = self.site_level(i, j, a, b) as usize;
-            let expected = pot.level_at(d);
-            if stored != expected {
-                let n = pot.radii().len();
-                let at = pot.radii()[n - stored.max(expected)];
-                if stored.abs_diff(expected) > 1 || (d - at).abs() > 1e-7 * at {
-                    return Err(format!(
-                        "sites {a} of {i} and {b} of {j} at distance {d} are stored on level \
-                         {stored}, their distance says {expected}"
-                    ));
-                }
-            }
-        }
-        Ok(())
+        self.table.check((i, j), dr, &qi, &qj, listed)
     }
 
     #[inline]
     fn forget(&mut self, i: u32) {
-        self.pending.clear(i);
+        self.table.forget(i);
     }
 
     fn rebase(&mut self, t0: f64) {
@@ -1554,7 +1138,8 @@ impl PairModel for Flexible {
     }
 
     fn rotational_dof(&self) -> f64 {
-        self.body_type
+        self.table
+            .body_type
             .iter()
             .map(|&t| self.types[t as usize].internal_dof())
             .sum()
@@ -1594,7 +1179,7 @@ impl PairModel for Flexible {
 
     fn report(&self) -> Report {
         let mut r = Report::default();
-        self.stats.report_into(&mut r);
+        self.table.stats.report_into(&mut r);
         self.flex_stats().report_into(&mut r);
         r
     }
@@ -1603,7 +1188,7 @@ impl PairModel for Flexible {
         (0..self.trajectories.len())
             .map(|i| match self.internal_state(i as u32, now) {
                 Ok((q, _)) => {
-                    let ty = &self.types[self.body_type[i] as usize];
+                    let ty = &self.types[self.table.type_of(i as u32)];
                     half_log_det_z(&ty.masses, &ty.bonds, &q)
                 }
                 Err(_) => f64::NAN,
@@ -1631,7 +1216,7 @@ impl PairModel for Flexible {
         // Called at a re-basing: the present is time 0. Each molecule restarts there with its
         // internal velocities reversed.
         for i in 0..self.trajectories.len() as u32 {
-            let ty = self.body_type[i as usize] as usize;
+            let ty = self.table.type_of(i);
             let state = self.trajectories[i as usize].state_at(&self.constraints[ty], 0.0);
             let done = state.and_then(|(q, mut u)| {
                 self.rescale(i as usize, &mut u);
@@ -1649,7 +1234,7 @@ impl PairModel for Flexible {
         // velocities scaled (brought first to the kinetic energy of its start when `rescale`
         // is on, as at events, so that the scaled energy is factor² times the tracked one).
         for i in 0..self.trajectories.len() as u32 {
-            let ty = self.body_type[i as usize] as usize;
+            let ty = self.table.type_of(i);
             let state = self.trajectories[i as usize].state_at(&self.constraints[ty], now);
             let done = state.and_then(|(q, mut u)| {
                 self.rescale(i as usize, &mut u);

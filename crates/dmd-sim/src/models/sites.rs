@@ -63,24 +63,21 @@
 
 use collide::{
     Body as CollideBody, Bond, CollideError, ConstraintSolver, Contact, LinearBody, Molecule,
-    Outcome, RigidBody, Velocity, contact,
+    RigidBody, Velocity, contact,
 };
 use glam::{DMat3, DQuat, DVec3};
 use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
 use rand_xoshiro::Xoshiro256PlusPlus;
 use rigid_free::{FreeMotion, Moments};
-use root_search::{Adaptive, Crossing, Grid, Method, SearchError};
+use root_search::SearchError;
 
 use crate::engine::event::{Boundary, Kind};
 use crate::engine::model::{Executed, Pair, PairClass, PairModel, PairSetupError, Report};
-use crate::engine::pair_state::{SavedSearches, SiteLevels};
 use crate::engine::potential::Potentials;
 use crate::engine::saved::StateReader;
-use crate::models::search::{
-    SearchMethod, SearchSettings, SearchStats, bracket, check_settings, jitter_factor, mix,
-};
-use crate::models::site_pairs::{Band, SITE_OVERLAP_TOLERANCE, SiteAtom, SiteSearch};
+use crate::models::search::{SearchSettings, SearchStats, check_settings, mix};
+use crate::models::site_pairs::{SiteAtom, SiteDistance, SiteSearch, SiteTable};
 
 /// Moments within this fraction of the largest are made equal (and a smallest moment below it
 /// is zero: a linear molecule). Far above the round-off of the Jacobi rotations (1e-15), far
@@ -523,61 +520,22 @@ impl Rotation {
     }
 }
 
-/// What a prediction left for its pair.
-#[derive(Clone, Debug, PartialEq)]
-enum Pending {
-    /// The molecules come within reach at `at`: set up every site pair then.
-    Later,
-    /// Per site pair, in the order of the pair's site-pair table.
-    Sites(Vec<SiteSearch>),
-    /// The pair event is for site pair `k` at `boundary`.
-    Fire(u32, Boundary),
-}
-
-/// One site pair of a pair of molecule types.
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct SitePair {
-    a: u16,
-    b: u16,
-    potential: u32,
-    /// `ρ_α + ρ_β`.
-    arms: f64,
-}
-
-/// The site pairs of one ordered pair of molecule types.
-#[derive(Clone, Debug, PartialEq)]
-struct TypePair {
-    pairs: Vec<SitePair>,
-    /// Largest centre distance at which any site pair interacts.
-    reach: f64,
-}
-
 /// Rigid site-based molecules with stepped site–site potentials (module documentation).
 #[derive(Debug)]
 pub struct Sites {
     types: Vec<MoleculeType>,
-    potentials: Potentials,
-    type_pairs: Vec<TypePair>,
-    body_type: Vec<u32>,
+    /// Site pairs, their levels and searches, and the molecules' types.
+    table: SiteTable,
     rotations: Vec<Rotation>,
-    /// Site-pair levels of molecule pairs `(i, j)`, `i < j`, in `j`-major order of `(α, β)`:
-    /// index `α n_j + β`. Absent: all on level 0.
-    levels: SiteLevels,
-    pending: SavedSearches<Pending>,
-    settings: SearchSettings,
     rule: ImpulseRule,
     cross: Option<CrossCheck>,
     solver: ConstraintSolver,
-    /// The key of the search steps' jitter ([`jitter_factor`]).
-    jitter_key: u64,
-    stats: SearchStats,
-    reach: f64,
 }
 
 impl Sites {
     /// Counters of this model's root searches so far.
     pub fn search_stats(&self) -> SearchStats {
-        self.stats
+        self.table.stats
     }
 
     /// Molecules of `types` interacting through the site–site `potentials` (over the site
@@ -599,7 +557,6 @@ impl Sites {
         rule: ImpulseRule,
         seed: u64,
     ) -> Result<Self, SitesError> {
-        let nt = types.len();
         let ns = potentials.n_species();
         for t in &types {
             if let Some(&s) = t.species.iter().find(|&&s| s as usize >= ns) {
@@ -613,30 +570,6 @@ impl Sites {
                 }
             }
         }
-        let mut type_pairs = Vec::with_capacity(nt * nt);
-        for ti in &types {
-            for tj in &types {
-                let mut pairs = Vec::new();
-                let mut reach: f64 = 0.0;
-                for (a, (&sa, &ra)) in ti.species.iter().zip(&ti.radii).enumerate() {
-                    for (b, (&sb, &rb)) in tj.species.iter().zip(&tj.radii).enumerate() {
-                        let k = potentials.index(sa, sb);
-                        reach = reach.max(potentials.all()[k].reach() + ra + rb);
-                        pairs.push(SitePair {
-                            a: a as u16,
-                            b: b as u16,
-                            potential: k as u32,
-                            arms: ra + rb,
-                        });
-                    }
-                }
-                type_pairs.push(TypePair {
-                    pairs,
-                    reach: reach * (1.0 + 1e-12),
-                });
-            }
-        }
-        let reach = type_pairs.iter().map(|p| p.reach).fold(0.0, f64::max);
         let mut rotations = Vec::with_capacity(body_type.len());
         for (i, &ty) in body_type.iter().enumerate() {
             let Some(t) = types.get(ty as usize) else {
@@ -659,22 +592,20 @@ impl Sites {
             rotations.push(Rotation { motion, t: t0 });
         }
         check_settings(&settings).map_err(SitesError::Search)?;
-        let n = body_type.len();
+        let table = SiteTable::new(
+            types.iter().map(|t| (&t.species[..], &t.radii[..])),
+            potentials,
+            body_type,
+            settings,
+            mix(seed ^ 0x5173_e500_0000_0011),
+        );
         Ok(Sites {
             types,
-            potentials,
-            type_pairs,
-            body_type: body_type.to_vec(),
+            table,
             rotations,
-            levels: SiteLevels::default(),
-            pending: SavedSearches::new(n),
-            settings,
             rule,
             cross: None,
             solver: ConstraintSolver::new(),
-            jitter_key: mix(seed ^ 0x5173_e500_0000_0011),
-            stats: SearchStats::default(),
-            reach,
         })
     }
 
@@ -709,12 +640,12 @@ impl Sites {
 
     /// The site–site potentials.
     pub fn potentials(&self) -> &Potentials {
-        &self.potentials
+        self.table.potentials()
     }
 
     /// The search settings.
     pub fn settings(&self) -> &SearchSettings {
-        &self.settings
+        self.table.settings()
     }
 
     /// Lab orientation (body → lab) and lab angular velocity of molecule `i` at `now`.
@@ -725,7 +656,7 @@ impl Sites {
     /// Lab positions of molecule `i`'s sites relative to its centre at `now`.
     pub fn site_arms(&self, i: u32, now: f64) -> Vec<DVec3> {
         let (r, _) = self.pose(i, now);
-        self.types[self.body_type[i as usize] as usize]
+        self.types[self.table.type_of(i)]
             .sites
             .iter()
             .map(|&d| r * d)
@@ -734,266 +665,38 @@ impl Sites {
 
     /// The stored level of site `a` of `i` with site `b` of `j`.
     pub fn site_level(&self, i: u32, j: u32, a: usize, b: usize) -> u16 {
-        self.levels.get(i, j, a, b, self.sizes(i, j))
+        self.table.site_level(i, j, a, b)
     }
 
     /// Number of molecule pairs with a site pair off level 0.
     pub fn stored_pairs(&self) -> usize {
-        self.levels.len()
+        self.table.stored_pairs()
     }
 
-    #[inline]
-    fn n_sites(&self, i: u32) -> usize {
-        self.types[self.body_type[i as usize] as usize].sites.len()
-    }
-
-    /// The site counts of `i` and `j`.
-    #[inline]
-    fn sizes(&self, i: u32, j: u32) -> (usize, usize) {
-        (self.n_sites(i), self.n_sites(j))
-    }
-
-    fn set_level(&mut self, i: u32, j: u32, a: usize, b: usize, level: u16) {
-        let sizes = self.sizes(i, j);
-        self.levels.set(i, j, a, b, sizes, level);
-    }
-
-    /// All site-pair levels of `(i, j)` in the order of the type pair's table (`α`-major for
-    /// `i`).
-    fn pair_levels(&self, i: u32, j: u32) -> Vec<u16> {
-        self.levels.pair(i, j, self.sizes(i, j))
-    }
-
-    #[inline]
-    fn type_pair(&self, i: u32, j: u32) -> usize {
-        self.body_type[i as usize] as usize * self.types.len() + self.body_type[j as usize] as usize
-    }
-
-    /// Sets up every site pair's search of `(i, j)` at `now` (brackets, then searches of those
-    /// already within reach), and chooses the pair's next event.
-    #[allow(clippy::too_many_arguments)]
-    fn start_sites(
-        &mut self,
-        i: u32,
-        j: u32,
-        now: f64,
-        dr: DVec3,
-        dv: DVec3,
-    ) -> Option<(f64, Kind)> {
-        let tp = self.type_pair(i, j);
-        let levels = self.pair_levels(i, j);
-        let n = self.type_pairs[tp].pairs.len();
-        let mut sites = Vec::with_capacity(n);
-        for (k, &level) in levels.iter().enumerate().take(n) {
-            let sp = self.type_pairs[tp].pairs[k];
-            let lv = self.potentials.all()[sp.potential as usize].levels()[level as usize];
-            // The band's largest radius: the outer one, or the inner one on level 0.
-            let radius = if lv.outer2 < f64::INFINITY {
-                lv.outer2.sqrt()
-            } else {
-                lv.inner2.sqrt()
-            };
-            let r = (radius + sp.arms) * (1.0 + 1e-12);
-            sites.push(match bracket(dr, dv, r * r) {
-                None => SiteSearch::Done,
-                Some((a, b)) if a.is_nan() || b.is_nan() => {
-                    self.stats.failures += 1;
-                    SiteSearch::Done
-                }
-                Some((a, b)) => SiteSearch::Deferred {
-                    at: now + a,
-                    end: now + b,
-                },
-            });
-        }
-        self.advance(i, j, now, dr, dv, sites, true)
-    }
-
-    /// Runs every site pair whose search is due at `now` up to `now + window`, then picks the
-    /// pair's next event: the earliest root if no stopped or deferred search lies before it,
-    /// else a virtual event at the earliest of those.
-    #[allow(clippy::too_many_arguments)]
-    fn advance(
-        &mut self,
-        i: u32,
-        j: u32,
-        now: f64,
-        dr: DVec3,
-        dv: DVec3,
+    /// Runs every site pair of `pair` whose search is due (on the molecules' free motion), then
+    /// picks the pair's next event ([`SiteTable::choose`]).
+    fn search(
+        table: &mut SiteTable,
+        (types, rotations): (&[MoleculeType], &[Rotation]),
+        pair: &Pair,
         mut sites: Vec<SiteSearch>,
         fresh: bool,
     ) -> Option<(f64, Kind)> {
-        let tp = self.type_pair(i, j);
-        let levels = self.pair_levels(i, j);
-        let window = self.settings.window;
-        let until = now + window;
-        let (ri, rj) = (self.rotations[i as usize], self.rotations[j as usize]);
-        let (ti, tj) = (
-            self.body_type[i as usize] as usize,
-            self.body_type[j as usize] as usize,
-        );
-        let mut cache = PoseCache::default();
-        for k in 0..sites.len() {
-            let due = match sites[k] {
-                SiteSearch::Deferred { at, .. } => at <= now,
-                SiteSearch::Suspended(s) => s.time() <= now || !fresh,
-                _ => false,
-            };
-            if !due {
-                continue;
-            }
-            let sp = self.type_pairs[tp].pairs[k];
-            let lv = self.potentials.all()[sp.potential as usize].levels()[levels[k] as usize];
-            let arm_i = self.types[ti].sites[sp.a as usize];
-            let arm_j = self.types[tj].sites[sp.b as usize];
-            let geo = SiteGeometry {
-                i,
-                j,
-                k: k as u32,
-                ri,
-                rj,
-                arm_i,
-                arm_j,
-                dr,
-                dv,
-                now,
-                band: Band::of(&lv),
-            };
-            sites[k] = self.search_site(&geo, &mut cache, sites[k], until);
-        }
-        let mut root = (f64::INFINITY, 0usize, Boundary::Inner);
-        let mut wait = f64::INFINITY;
-        for (k, s) in sites.iter().enumerate() {
-            match *s {
-                SiteSearch::Root(t, b) if t < root.0 => root = (t, k, b),
-                SiteSearch::Suspended(st) => wait = wait.min(st.time()),
-                SiteSearch::Deferred { at, .. } => wait = wait.min(at),
-                _ => {}
-            }
-        }
-        if root.0 <= wait && root.0 < f64::INFINITY {
-            let dt = root.0 - now;
-            self.pending
-                .set(i, j, now + dt, Pending::Fire(root.1 as u32, root.2));
-            return Some((dt, Kind::Pair(root.2)));
-        }
-        if wait < f64::INFINITY {
-            let dt = (wait - now).max(0.0);
-            self.pending.set(i, j, now + dt, Pending::Sites(sites));
-            return Some((dt, Kind::Virtual));
-        }
-        None
-    }
-
-    /// Starts or continues one site pair's search up to `until`.
-    fn search_site(
-        &mut self,
-        geo: &SiteGeometry,
-        cache: &mut PoseCache,
-        from: SiteSearch,
-        until: f64,
-    ) -> SiteSearch {
-        let band = geo.band;
-        let (t0, end) = match from {
-            SiteSearch::Deferred { at, end } => (at.max(geo.now), end),
-            SiteSearch::Suspended(s) => (s.time(), s.end()),
-            other => return other,
+        let Pair {
+            i, j, now, dr, dv, ..
+        } = *pair;
+        let mut geo = RigidGeometry {
+            ri: rotations[i as usize],
+            rj: rotations[j as usize],
+            sites_i: &types[table.type_of(i)].sites,
+            sites_j: &types[table.type_of(j)].sites,
+            dr,
+            dv,
+            now,
+            cache: PoseCache::default(),
         };
-        if let SiteSearch::Deferred { .. } = from {
-            // A search that starts with its pair off the stored level has missed an event.
-            let (d2, rate) = geo.distance2(cache, t0);
-            let tol = 1e-7 * band.scale;
-            if d2 < band.lo - tol || d2 > band.hi + tol {
-                self.stats.off_terrace += 1;
-            }
-            if let Some(boundary) = band.leaving(d2, rate) {
-                self.stats.roots += 1;
-                return SiteSearch::Root(t0, boundary);
-            }
-        }
-        let key = mix(self.jitter_key ^ u64::from(geo.k));
-        let jitter = jitter_factor(self.settings.jitter, key, geo.i, geo.j, t0);
-        let step = self.settings.max_step * jitter;
-        // A bracket without end (no relative motion: only rotation changes d) needs a window.
-        let horizon = if until == f64::INFINITY && end == f64::INFINITY {
-            t0 + 1e4 * self.settings.max_step
-        } else {
-            until
-        };
-        let window = (horizon - t0).max(f64::MIN_POSITIVE);
-        let mut evals = 0u32;
-        let mut indicator = |t: f64| -> (f64, f64) {
-            evals += 1;
-            let (d2, rate) = geo.distance2(cache, t);
-            band.indicator(d2, rate)
-        };
-        let result = match (self.settings.method, from) {
-            (SearchMethod::Adaptive, SiteSearch::Suspended(s)) => {
-                Adaptive::new(step).and_then(|m| m.resume(&mut indicator, s, window))
-            }
-            (SearchMethod::Adaptive, _) => Adaptive::new(step)
-                .and_then(|m| m.start(&mut indicator, t0, end, Crossing::Falling, window)),
-            (SearchMethod::Grid { threshold }, SiteSearch::Suspended(s)) => {
-                Grid::new(step, threshold).and_then(|m| m.resume(&mut indicator, s, window))
-            }
-            (SearchMethod::Grid { threshold }, _) => Grid::new(step, threshold)
-                .and_then(|m| m.start(&mut indicator, t0, end, Crossing::Falling, window)),
-        };
-        self.stats.searches += 1;
-        self.stats.evaluations += u64::from(evals);
-        let report = match result {
-            Ok(r) => r,
-            Err(_) => {
-                self.stats.failures += 1;
-                return SiteSearch::Done;
-            }
-        };
-        let checked_to = match report.outcome {
-            root_search::Outcome::Root(r) => r.t,
-            root_search::Outcome::Suspended(s) => s.time(),
-            root_search::Outcome::NoRoot => end,
-        };
-        if let Some(fine) = self.settings.verify_step {
-            self.stats.verified += 1;
-            let mut reference = |t: f64| -> (f64, f64) {
-                let (d2, rate) = geo.distance2(cache, t);
-                band.indicator(d2, rate)
-            };
-            let found = Grid::new(fine, f64::INFINITY).and_then(|g| {
-                g.start(
-                    &mut reference,
-                    t0,
-                    checked_to.min(t0 + 1e4 * self.settings.max_step),
-                    Crossing::Falling,
-                    f64::INFINITY,
-                )
-            });
-            if let Ok(rep) = found
-                && let Some(tg) = rep.root()
-                && tg < checked_to - 1e-6 * self.settings.max_step
-            {
-                self.stats.verify_misses += 1;
-            }
-        }
-        match report.outcome {
-            root_search::Outcome::Root(r) => {
-                self.stats.roots += 1;
-                let (d2, _) = geo.distance2(cache, r.t);
-                let boundary = if band.hi == f64::INFINITY
-                    || (band.lo > 0.0 && (d2 - band.lo).abs() < (band.hi - d2).abs())
-                {
-                    Boundary::Inner
-                } else {
-                    Boundary::Outer
-                };
-                SiteSearch::Root(r.t, boundary)
-            }
-            root_search::Outcome::Suspended(s) => {
-                self.stats.suspended += 1;
-                SiteSearch::Suspended(s)
-            }
-            root_search::Outcome::NoRoot => SiteSearch::Done,
-        }
+        table.search_due(&mut geo, (i, j), now, &mut sites, fresh);
+        table.choose(i, j, now, sites)
     }
 
     /// The lab velocities of sites after the rule: the rule's new velocities of both bodies.
@@ -1010,8 +713,8 @@ impl Sites {
         vel_j: Velocity,
         step: f64,
     ) -> Result<(collide::Impulse, Velocity, Velocity), CollideError> {
-        let ti = &self.types[self.body_type[i as usize] as usize];
-        let tj = &self.types[self.body_type[j as usize] as usize];
+        let ti = &self.types[self.table.type_of(i)];
+        let tj = &self.types[self.table.type_of(j)];
         let arms_i: Vec<DVec3> = ti.sites.iter().map(|&d| oi * d).collect();
         let arms_j: Vec<DVec3> = tj.sites.iter().map(|&d| oj * d).collect();
         let pos_i: Vec<DVec3> = arms_i.iter().map(|&d| dr + d).collect();
@@ -1096,28 +799,25 @@ impl PoseCache {
     }
 }
 
-/// What one site pair's indicator needs.
-struct SiteGeometry {
-    /// The pair and the index of the site pair in its table (they key the jitter).
-    i: u32,
-    j: u32,
-    k: u32,
+/// The two molecules of a pair and their relative centre motion: what the site pairs'
+/// indicators need.
+struct RigidGeometry<'a> {
     ri: Rotation,
     rj: Rotation,
-    arm_i: DVec3,
-    arm_j: DVec3,
+    /// The sites of each in its body frame.
+    sites_i: &'a [DVec3],
+    sites_j: &'a [DVec3],
     dr: DVec3,
     dv: DVec3,
     now: f64,
-    band: Band,
+    cache: PoseCache,
 }
 
-impl SiteGeometry {
-    /// `d²` of the site pair at `t` and its rate `2 r·u`.
+impl SiteDistance for RigidGeometry<'_> {
     #[inline]
-    fn distance2(&self, cache: &mut PoseCache, t: f64) -> (f64, f64) {
-        let (oi, wi, oj, wj) = cache.get(t, &self.ri, &self.rj);
-        let (di, dj) = (oi * self.arm_i, oj * self.arm_j);
+    fn distance2(&mut self, a: usize, b: usize, t: f64) -> (f64, f64) {
+        let (oi, wi, oj, wj) = self.cache.get(t, &self.ri, &self.rj);
+        let (di, dj) = (oi * self.sites_i[a], oj * self.sites_j[b]);
         let r = self.dr + self.dv * (t - self.now) + di - dj;
         let u = self.dv + wi.cross(di) - wj.cross(dj);
         (r.length_squared(), 2.0 * r.dot(u))
@@ -1126,7 +826,7 @@ impl SiteGeometry {
 
 impl PairModel for Sites {
     fn reach(&self) -> f64 {
-        self.reach
+        self.table.reach()
     }
 
     fn n_species(&self) -> usize {
@@ -1139,62 +839,24 @@ impl PairModel for Sites {
 
     fn setup_pair(&mut self, pair: &Pair) -> Result<(), PairSetupError> {
         let Pair { i, j, dr, .. } = *pair;
+        // Both molecules at i's clock (a new pair: both moved freely since then).
         let t = self.rotations[i as usize].t;
-        let (oi, _) = self.pose(i, t);
-        let (oj, _) = self.pose(j, t);
-        let tp = self.type_pair(i, j);
-        let (ti, tj) = (
-            self.body_type[i as usize] as usize,
-            self.body_type[j as usize] as usize,
-        );
-        for k in 0..self.type_pairs[tp].pairs.len() {
-            let sp = self.type_pairs[tp].pairs[k];
-            let pot = &self.potentials.all()[sp.potential as usize];
-            let d = (dr + oi * self.types[ti].sites[sp.a as usize]
-                - oj * self.types[tj].sites[sp.b as usize])
-                .length();
-            if let Some(core) = pot.core()
-                && d < core
-            {
-                return Err(PairSetupError::Overlap { distance: d, core });
-            }
-            let level = pot.level_at(d);
-            if level > 0 {
-                self.set_level(i, j, sp.a as usize, sp.b as usize, level as u16);
-            }
-        }
-        Ok(())
+        let (arms_i, arms_j) = (self.site_arms(i, t), self.site_arms(j, t));
+        self.table.setup(i, j, dr, &arms_i, &arms_j)
     }
 
     fn predict(&mut self, pair: &Pair) -> Option<(f64, Kind)> {
-        let Pair {
-            i, j, now, dr, dv, ..
-        } = *pair;
-        let tp = self.type_pair(i, j);
-        let reach = self.type_pairs[tp].reach;
-        let (start, _) = bracket(dr, dv, reach * reach)?;
-        if start.is_nan() {
-            self.stats.failures += 1;
-            return None;
-        }
-        if start > 0.0 {
-            // Not yet within the bounding spheres' reach: set the site pairs up when there.
-            self.stats.deferred += 1;
-            self.pending.set(i, j, now + start, Pending::Later);
-            return Some((start, Kind::Virtual));
-        }
-        self.start_sites(i, j, now, dr, dv)
+        let motion = (&self.types[..], &self.rotations[..]);
+        self.table.predict(pair, |table, sites, fresh| {
+            Self::search(table, motion, pair, sites, fresh)
+        })
     }
 
     fn resume(&mut self, pair: &Pair) -> Option<(f64, Kind)> {
-        let Pair {
-            i, j, now, dr, dv, ..
-        } = *pair;
-        match self.pending.take(i, j, now)? {
-            Pending::Later => self.start_sites(i, j, now, dr, dv),
-            Pending::Sites(sites) => self.advance(i, j, now, dr, dv, sites, false),
-            Pending::Fire(..) => None,
-        }
+        let motion = (&self.types[..], &self.rotations[..]);
+        self.table.resume(pair, |table, sites, fresh| {
+            Self::search(table, motion, pair, sites, fresh)
+        })
     }
 
     fn execute(
@@ -1211,39 +873,20 @@ impl PairModel for Sites {
             virial: 0.0,
             overlap,
         };
-        let Some(Pending::Fire(k, boundary)) = self.pending.take(i, j, now) else {
+        let Ok(Some(fired)) = self.table.fire(i, j, now) else {
             return Ok(skipped(false));
         };
-        let tp = self.type_pair(i, j);
-        let sp = self.type_pairs[tp].pairs[k as usize];
-        let (a, b) = (sp.a as usize, sp.b as usize);
-        let (ti, tj) = (
-            self.body_type[i as usize] as usize,
-            self.body_type[j as usize] as usize,
-        );
+        let (a, b) = (fired.a, fired.b);
+        let (ti, tj) = (self.table.type_of(i), self.table.type_of(j));
         let (oi, wi) = self.pose(i, now);
         let (oj, wj) = self.pose(j, now);
         let (di, dj) = (oi * self.types[ti].sites[a], oj * self.types[tj].sites[b]);
         let n = dr + di - dj;
-        let level = self.site_level(i, j, a, b);
-        let pot = &self.potentials.all()[sp.potential as usize];
-        let lv = pot.levels()[level as usize];
         let u = (*vi + wi.cross(di)) - (*vj + wj.cross(dj));
-        let rate = n.dot(u);
-        let (radius2, step, right_way) = match boundary {
-            Boundary::Inner => (lv.inner2, lv.dv_in, rate < 0.0),
-            Boundary::Outer => (lv.outer2, lv.dv_out, rate > 0.0),
-        };
-        let d2 = n.length_squared();
-        // The distance must be at the boundary to the root tolerance (1e-10 of the step, in
-        // time) and round-off.
-        let tol = 1e-9 * radius2 + 2.0 * 8.0 * rate.abs() * 1e-10 * self.settings.max_step;
-        if (d2 - radius2).abs() > tol || d2.is_nan() {
-            self.stats.misfits += 1;
-        }
-        let overlap = step == f64::INFINITY && d2 < radius2 * (1.0 - SITE_OVERLAP_TOLERANCE);
-        if !right_way {
-            return Ok(skipped(overlap));
+        let judged = self.table.judge(&fired, n, n.dot(u));
+        let step = judged.step;
+        if !judged.right_way {
+            return Ok(skipped(judged.overlap));
         }
         let vel_i = Velocity::new(*vi, wi);
         let vel_j = Velocity::new(*vj, wj);
@@ -1291,30 +934,18 @@ impl PairModel for Sites {
         *vi = new_i.linear;
         *vj = new_j.linear;
         for (m, o, v) in [(i, oi, new_i.angular), (j, oj, new_j.angular)] {
-            let t = &self.types[self.body_type[m as usize] as usize];
+            let t = &self.types[self.table.type_of(m)];
             let q = DQuat::from_mat3(&o).normalize();
             let wb = DMat3::from_quat(q).transpose() * v;
             let motion = FreeMotion::from_quat(&t.moments, q, wb)
                 .map_err(|_| CollideError::NotFinite("angular velocity after the impulse"))?;
             self.rotations[m as usize] = Rotation { motion, t: now };
         }
-        let class = match (imp.outcome, boundary) {
-            (Outcome::Reflected, _) if step == f64::INFINITY => PairClass::Core,
-            (Outcome::Reflected, _) => PairClass::StepReflect,
-            (Outcome::Crossed, Boundary::Inner) => {
-                self.set_level(i, j, a, b, level + 1);
-                PairClass::StepIn
-            }
-            (Outcome::Crossed, Boundary::Outer) => {
-                self.set_level(i, j, a, b, level - 1);
-                PairClass::StepOut
-            }
-        };
         Ok(Executed {
-            class,
+            class: self.table.settle(i, j, &fired, imp.outcome, step),
             delta_u: imp.delta_v,
             virial: imp.s * dr.dot(n),
-            overlap,
+            overlap: judged.overlap,
         })
     }
 
@@ -1336,28 +967,8 @@ impl PairModel for Sites {
 
     fn configured_level(&self, pair: &Pair, _stored: u16) -> (u16, f64) {
         let Pair { i, j, now, dr, .. } = *pair;
-        let (lo, hi) = (i.min(j), i.max(j));
-        // `dr` is r_i − r_j: orient it from the lower index like the stored levels.
-        let dr = if i == lo { dr } else { -dr };
-        let stored = self.levels.stored(lo, hi);
-        let tp = self.type_pair(lo, hi);
-        let (olo, _) = self.pose(lo, now);
-        let (ohi, _) = self.pose(hi, now);
-        let (tlo, thi) = (
-            self.body_type[lo as usize] as usize,
-            self.body_type[hi as usize] as usize,
-        );
-        let mut e = 0.0;
-        for (k, sp) in self.type_pairs[tp].pairs.iter().enumerate() {
-            let pot = &self.potentials.all()[sp.potential as usize];
-            let d = (dr + olo * self.types[tlo].sites[sp.a as usize]
-                - ohi * self.types[thi].sites[sp.b as usize])
-                .length();
-            let held = stored.map_or(0, |l| l[k] as usize);
-            let level = pot.true_level(held, d);
-            e += pot.levels()[level].energy;
-        }
-        (0, e)
+        let (arms_i, arms_j) = (self.site_arms(i, now), self.site_arms(j, now));
+        (0, self.table.configured_energy(i, j, dr, &arms_i, &arms_j))
     }
 
     fn extra_state(&self) -> Vec<f64> {
@@ -1371,15 +982,14 @@ impl PairModel for Sites {
             x.extend_from_slice(&p.omega.to_array());
             x.push(r.t);
         }
-        self.levels.write_numbers(&mut x);
-        self.stats.write_numbers(&mut x);
+        self.table.write_numbers(&mut x);
         x
     }
 
     fn set_extra_state(&mut self, state: &[f64]) -> Result<(), String> {
         let mut r = StateReader::new(state);
         let mut rotations = Vec::with_capacity(self.rotations.len());
-        for (i, &ty) in self.body_type.iter().enumerate() {
+        for (i, &ty) in self.table.body_type.iter().enumerate() {
             let orientation = r.mat3("a molecule's orientation")?;
             let omega = r.vec3("a molecule's angular velocity")?;
             let t = r.real("a molecule's clock")?;
@@ -1391,89 +1001,30 @@ impl PairModel for Sites {
             .map_err(|e| format!("molecule {i} cannot be restored: {e}"))?;
             rotations.push(Rotation { motion, t });
         }
-        let n = self.body_type.len() as u32;
-        let levels = SiteLevels::read_numbers(
-            &mut r,
-            n,
-            |i, j| self.type_pairs[self.type_pair(i, j)].pairs.len(),
-            |i, j, k| {
-                let sp = self.type_pairs[self.type_pair(i, j)].pairs[k];
-                self.potentials.all()[sp.potential as usize].levels().len()
-            },
-        )?;
-        let stats = SearchStats::read_numbers(&mut r)?;
+        let table = self.table.read_numbers(&mut r)?;
         r.finish()?;
         self.rotations = rotations;
-        self.levels = levels;
-        self.stats = stats;
+        self.table.commit(table);
         Ok(())
     }
 
     fn pair_energy(&self, i: u32, j: u32, _si: u32, _sj: u32) -> f64 {
-        let Some(l) = self.levels.stored(i, j) else {
-            return 0.0;
-        };
-        let (lo, hi) = (i.min(j), i.max(j));
-        let tp = self.type_pair(lo, hi);
-        let mut e = 0.0;
-        for (k, sp) in self.type_pairs[tp].pairs.iter().enumerate() {
-            if l[k] != 0 {
-                e += self.potentials.all()[sp.potential as usize].levels()[l[k] as usize].energy;
-            }
-        }
-        e
+        self.table.pair_energy(i, j)
     }
 
     fn check_pair(&self, pair: &Pair, listed: bool) -> Result<(), String> {
         let Pair { i, j, now, dr, .. } = *pair;
-        let tp = self.type_pair(i, j);
-        let (oi, _) = self.pose(i, now);
-        let (oj, _) = self.pose(j, now);
-        let (ti, tj) = (
-            self.body_type[i as usize] as usize,
-            self.body_type[j as usize] as usize,
-        );
-        for sp in &self.type_pairs[tp].pairs {
-            let pot = &self.potentials.all()[sp.potential as usize];
-            let d = (dr + oi * self.types[ti].sites[sp.a as usize]
-                - oj * self.types[tj].sites[sp.b as usize])
-                .length();
-            let (a, b) = (sp.a as usize, sp.b as usize);
-            if d < pot.reach() && !listed {
-                return Err(format!(
-                    "sites {a} of {i} and {b} of {j} interact at {d} but the pair is not listed"
-                ));
-            }
-            if let Some(core) = pot.core()
-                && d * d < core * core * (1.0 - SITE_OVERLAP_TOLERANCE)
-            {
-                return Err(format!(
-                    "site {a} of {i} and site {b} of {j} overlap: distance {d} < {core}"
-                ));
-            }
-            let stored = self.site_level(i, j, a, b) as usize;
-            let expected = pot.level_at(d);
-            if stored != expected {
-                let n = pot.radii().len();
-                let at = pot.radii()[n - stored.max(expected)];
-                if stored.abs_diff(expected) > 1 || (d - at).abs() > 1e-7 * at {
-                    return Err(format!(
-                        "sites {a} of {i} and {b} of {j} at distance {d} are stored on level \
-                         {stored}, their distance says {expected}"
-                    ));
-                }
-            }
-        }
-        Ok(())
+        let (arms_i, arms_j) = (self.site_arms(i, now), self.site_arms(j, now));
+        self.table.check((i, j), dr, &arms_i, &arms_j, listed)
     }
 
     #[inline]
     fn forget(&mut self, i: u32) {
-        self.pending.clear(i);
+        self.table.forget(i);
     }
 
     fn rebase(&mut self, t0: f64) {
-        for (r, &ty) in self.rotations.iter_mut().zip(&self.body_type) {
+        for (r, &ty) in self.rotations.iter_mut().zip(&self.table.body_type) {
             let p = r.motion.pose(t0 - r.t);
             let q = DQuat::from_mat3(&p.orientation).normalize();
             match FreeMotion::from_quat(&self.types[ty as usize].moments, q, p.omega) {
@@ -1486,7 +1037,7 @@ impl PairModel for Sites {
 
     fn rotational_kinetic(&self) -> f64 {
         let mut k = crate::engine::sum::Compensated::ZERO;
-        for (r, &ty) in self.rotations.iter().zip(&self.body_type) {
+        for (r, &ty) in self.rotations.iter().zip(&self.table.body_type) {
             let w = r.motion.omega(0.0);
             k.add(0.5 * (self.types[ty as usize].principal * w * w).element_sum());
         }
@@ -1494,7 +1045,8 @@ impl PairModel for Sites {
     }
 
     fn rotational_dof(&self) -> f64 {
-        self.body_type
+        self.table
+            .body_type
             .iter()
             .map(|&t| self.types[t as usize].rotational_dof())
             .sum()
@@ -1545,14 +1097,14 @@ impl PairModel for Sites {
 
     fn report(&self) -> Report {
         let mut r = Report::default();
-        self.stats.report_into(&mut r);
+        self.table.stats.report_into(&mut r);
         r
     }
 
     fn draw_rotations(&mut self, now: f64, temperature: f64, rng: &mut Xoshiro256PlusPlus) {
         // HMC's momentum refresh: each molecule restarts at `now` from its present attitude
         // with a body-frame angular velocity drawn from equipartition.
-        for (r, &ty) in self.rotations.iter_mut().zip(&self.body_type) {
+        for (r, &ty) in self.rotations.iter_mut().zip(&self.table.body_type) {
             let t = &self.types[ty as usize];
             let p = r.motion.pose(now - r.t);
             let q = DQuat::from_mat3(&p.orientation).normalize();
@@ -1566,7 +1118,7 @@ impl PairModel for Sites {
     fn reverse_rotations(&mut self) {
         // HMC reverses at a re-basing (present time 0), where every molecule is anchored: the
         // reversed motion starts from the same attitude with −ω and retraces the old one.
-        for (r, &ty) in self.rotations.iter_mut().zip(&self.body_type) {
+        for (r, &ty) in self.rotations.iter_mut().zip(&self.table.body_type) {
             let moments = &self.types[ty as usize].moments;
             let p = r.motion.pose(-r.t);
             let reversed = if r.t == 0.0 {
@@ -1588,7 +1140,7 @@ impl PairModel for Sites {
     fn scale_rotations(&mut self, now: f64, factor: f64) {
         // Each molecule restarts at `now` from its present attitude with its body-frame
         // angular velocity scaled, as a thermostat collision restarts it with a fresh one.
-        for (r, &ty) in self.rotations.iter_mut().zip(&self.body_type) {
+        for (r, &ty) in self.rotations.iter_mut().zip(&self.table.body_type) {
             let p = r.motion.pose(now - r.t);
             let q = DQuat::from_mat3(&p.orientation).normalize();
             if let Ok(motion) =
@@ -1742,7 +1294,6 @@ pub mod molecules {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::engine::potential::Level;
 
     fn atom(x: f64, y: f64, z: f64, mass: f64) -> SiteAtom {
         SiteAtom {
@@ -1908,43 +1459,11 @@ mod tests {
                 .all(|&x| x < 1e-12 * m.z)
         );
     }
-
-    #[test]
-    fn band_indicator_watches_both_radii() {
-        let b = Band::of(&Level {
-            inner2: 1.0,
-            outer2: 2.25,
-            dv_in: f64::INFINITY,
-            dv_out: 1.0,
-            energy: -1.0,
-        });
-        assert!(b.indicator(1.5, 0.0).0 > 0.0);
-        assert_eq!(b.indicator(1.0, -2.0), (0.0, -2.0));
-        assert_eq!(b.indicator(2.25, 2.0), (0.0, -2.0));
-        let b0 = Band::of(&Level {
-            inner2: 2.25,
-            outer2: f64::INFINITY,
-            dv_in: -1.0,
-            dv_out: f64::NAN,
-            energy: 0.0,
-        });
-        assert_eq!(b0.indicator(3.0, -1.0), (0.75, -1.0));
-        // On a boundary: leaving only when moving out; just crossed in (moving in), or
-        // grazing, or inside, it is not leaving.
-        assert_eq!(b.leaving(2.25, 0.5), Some(Boundary::Outer));
-        assert_eq!(b.leaving(2.25 * (1.0 - 1e-13), 0.5), Some(Boundary::Outer));
-        assert_eq!(b.leaving(1.0, -0.5), Some(Boundary::Inner));
-        assert_eq!(b.leaving(2.25, -0.5), None);
-        assert_eq!(b.leaving(2.25, 0.0), None);
-        assert_eq!(b.leaving(1.0, 0.5), None);
-        assert_eq!(b.leaving(2.2, 0.5), None);
-        assert_eq!(b0.leaving(2.25, -0.1), Some(Boundary::Inner));
-        assert_eq!(b0.leaving(2.25, 0.1), None);
-    }
 }
 #[cfg(test)]
 mod pair_tests {
     use super::*;
+    use crate::engine::pair_state::SiteLevels;
 
     fn atom(x: f64, y: f64, z: f64, mass: f64) -> SiteAtom {
         SiteAtom {
@@ -2085,8 +1604,13 @@ mod pair_tests {
             1,
         )
         .unwrap();
-        m.levels.set(0, 1, 2, 1, (3, 3), 2);
-        m.stats.searches = 7;
+        let mut levels = SiteLevels::default();
+        levels.set(0, 1, 2, 1, (3, 3), 2);
+        let stats = SearchStats {
+            searches: 7,
+            ..SearchStats::default()
+        };
+        m.table.commit((levels, stats));
         m
     }
 
@@ -2118,8 +1642,8 @@ mod pair_tests {
         let poses: Vec<_> = (0..2).map(|i| m.pose(i, 0.9)).collect();
         let mut rng = Xoshiro256PlusPlus::seed_from_u64(5);
         m.draw_rotations(0.0, 2.0, &mut rng);
-        m.levels = SiteLevels::default();
-        m.stats = SearchStats::default();
+        m.table
+            .commit((SiteLevels::default(), SearchStats::default()));
         assert_ne!(m.pose(0, 0.9), poses[0]);
         m.set_extra_state(&saved).unwrap();
         for (i, p) in poses.iter().enumerate() {
@@ -2133,8 +1657,8 @@ mod pair_tests {
                 p.1.to_array().map(f64::to_bits)
             );
         }
-        assert_eq!(m.levels.get(0, 1, 2, 1, (3, 3)), 2);
-        assert_eq!(m.stats.searches, 7);
+        assert_eq!(m.site_level(0, 1, 2, 1), 2);
+        assert_eq!(m.search_stats().searches, 7);
         assert_eq!(m.extra_state(), saved);
         // Too short, too long, a level beyond the table, a pair beyond the molecules.
         assert!(m.set_extra_state(&saved[..saved.len() - 1]).is_err());
