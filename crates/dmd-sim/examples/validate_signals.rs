@@ -20,6 +20,8 @@
 //! were stopped before their end (a signal that comes after the end stops nothing). `--figures
 //! DIR` is accepted for symmetry with the other validations (no figure is written).
 
+use rand::{Rng, SeedableRng};
+use rand_xoshiro::SplitMix64;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::{Command, ExitCode, Stdio};
@@ -162,7 +164,7 @@ fn main() -> ExitCode {
         .duration_since(std::time::UNIX_EPOCH)
         .map_or(1, |d| d.as_nanos() as u64)
         | 1;
-    let mut rng = SplitMix(seed);
+    let mut rng = SplitMix64::seed_from_u64(seed);
     let mut report = String::new();
     let _ = writeln!(
         report,
@@ -244,22 +246,10 @@ fn build_dmd() -> Result<PathBuf, String> {
     }
 }
 
-/// The generator of the moments (SplitMix64).
-struct SplitMix(u64);
-
-impl SplitMix {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        (z >> 11) as f64 / (1u64 << 53) as f64
-    }
-
-    fn between(&mut self, a: f64, b: f64) -> f64 {
-        a + (b - a) * self.next()
-    }
+/// A uniform draw in `[a, b)` from the moments' generator (SplitMix64: portable, so the
+/// moments are the same on every machine).
+fn between(rng: &mut SplitMix64, a: f64, b: f64) -> f64 {
+    a + (b - a) * ((rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64)
 }
 
 /// `summary.json` of `dir` without its timings, or `None` without one.
@@ -404,7 +394,7 @@ fn run_case(
     case: &Case,
     dir: &Path,
     o: &Options,
-    rng: &mut SplitMix,
+    rng: &mut SplitMix64,
 ) -> Result<(String, bool), String> {
     let os = |p: &Path| p.as_os_str().to_owned();
     let scene_with = |events: u64, name: &str| -> Result<PathBuf, String> {
@@ -467,7 +457,7 @@ fn run_case(
     for t in 0..o.trials {
         let out = dir.join(format!("trial{t}"));
         let ck = out.join("checkpoint.dmd");
-        let first = rng.between(0.05, 0.85) * cpu;
+        let first = between(rng, 0.05, 0.85) * cpu;
         let (code, err) = run_and_stop(
             dmd,
             &[
@@ -495,7 +485,7 @@ fn run_case(
         let mut second_text = ("–".to_owned(), "–".to_owned());
         if trial_ok && code == Some(INTERRUPTED) {
             if t % 2 == 1 {
-                let second = rng.between(0.05, 0.5) * (cpu - first).max(0.0);
+                let second = between(rng, 0.05, 0.5) * (cpu - first).max(0.0);
                 let (code2, err2) = run_and_stop(
                     dmd,
                     &["resume".as_ref(), "--quiet".as_ref(), &os(&ck)],

@@ -5,6 +5,8 @@
 //! (every ordinary run, and HMC before its first segment) it costs one predictable branch per
 //! prediction.
 
+use crate::engine::hash::mix;
+
 /// Which pairs the predictions skip in the present segment (none while inactive).
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Blindfold {
@@ -51,14 +53,6 @@ impl Blindfold {
         let (a, b) = if i < j { (i, j) } else { (j, i) };
         mix(self.key ^ (u64::from(a) << 32 | u64::from(b))) < self.threshold
     }
-}
-
-/// SplitMix64's finaliser: a well-mixed 64-bit hash.
-fn mix(mut z: u64) -> u64 {
-    z = z.wrapping_add(0x9e37_79b9_7f4a_7c15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    z ^ (z >> 31)
 }
 
 #[cfg(test)]

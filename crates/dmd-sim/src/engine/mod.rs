@@ -8,6 +8,7 @@ pub mod body;
 pub mod cell;
 pub mod event;
 pub(crate) mod fault;
+pub(crate) mod hash;
 pub mod model;
 pub mod neighbour;
 pub mod pair_state;

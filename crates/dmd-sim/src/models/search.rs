@@ -5,6 +5,7 @@
 use glam::DVec3;
 use root_search::{Adaptive, Grid, SearchError};
 
+use crate::engine::hash::mix;
 use crate::engine::model::Report;
 use crate::engine::saved::{StateReader, push_count};
 
@@ -287,13 +288,4 @@ pub fn jitter_factor(jitter: f64, key: u64, i: u32, j: u32, t0: f64) -> f64 {
     } else {
         1.0
     }
-}
-
-/// SplitMix64's finaliser: a well-mixed 64-bit hash.
-#[inline]
-pub fn mix(mut z: u64) -> u64 {
-    z = z.wrapping_add(0x9e37_79b9_7f4a_7c15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    z ^ (z >> 31)
 }

@@ -20,6 +20,9 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
+use rand::{Rng as _, SeedableRng};
+use rand_xoshiro::SplitMix64;
+
 use dmd_sim::checkpoint::{self, Every};
 use dmd_sim::init;
 use dmd_sim::run::{Quiet, RunError, run_scene};
@@ -32,16 +35,12 @@ const SLOW: Duration = Duration::from_secs(20);
 /// The longest first line of an error message that is not a finding.
 const LONGEST_LINE: usize = 1500;
 
-/// splitmix64: small, seedable, and the same on every platform.
-struct Rng(u64);
+/// SplitMix64: small, seedable, and the same on every platform.
+struct Rng(SplitMix64);
 
 impl Rng {
     fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
+        self.0.next_u64()
     }
 
     fn below(&mut self, n: usize) -> usize {
@@ -289,7 +288,7 @@ fn fuzz(
 ) -> u64 {
     assert!(!seeds.is_empty(), "{target}: no seed inputs");
     let (budget, seed) = budget(target);
-    let mut rng = Rng(seed);
+    let mut rng = Rng(SplitMix64::seed_from_u64(seed));
     let findings_dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("fuzz-findings");
     let start = Instant::now();
     let mut tried = 0u64;
