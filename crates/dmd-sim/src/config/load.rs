@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use crate::config::scene::{Scene, SceneError};
-use crate::config::{flexible_scene, limits, site_scene, smd_spec};
+use crate::config::{limits, site_scene, smd_spec};
 
 impl Scene {
     /// Reads and checks a scene file, applying `overrides` (`KEY=VALUE`) first.
@@ -97,17 +97,8 @@ impl Scene {
     /// engine's keys, ensembles.
     fn check(&self) -> Result<(), SceneError> {
         self.check_species()?;
-        // Pair tables (rigid site molecules have site–site tables instead).
-        if self.has_sites() {
-            site_scene::check(self)?;
-            if self.has_bonds() {
-                flexible_scene::check(self)?;
-            }
-        } else {
-            site_scene::refuse_site_keys(self)?;
-            flexible_scene::refuse_keys(self)?;
-            self.check_pair_tables()?;
-        }
+        // The body kind's keys and tables.
+        crate::config::plan::check_bodies(self)?;
         self.check_rest()?;
         limits::check(self)?;
         smd_spec::check(self)?;

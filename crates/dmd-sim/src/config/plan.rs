@@ -1,10 +1,88 @@
-//! Which model a scene builds: [`Plan::of`] is the one place that decides it from the body
-//! kind (stepped spheres, terraced rods or tops of a potential kind, rigid site molecules,
-//! semi-flexible molecules), with the tables of that model.
+//! Which model a scene builds: [`Plan`] is the one place that branches on the body kind
+//! (stepped spheres, terraced rods or tops of a potential kind, rigid site molecules,
+//! semi-flexible molecules). [`Plan::of`] decides it with the tables of that model; the plan
+//! then answers what the driver asks of a body kind (its reach and name, how frames draw it,
+//! whether its bodies rotate, how a start file gives its molecules) and builds the model for
+//! a [`UseModel`], which receives it as a type: the event loop stays statically dispatched
+//! per model.
 
-use crate::config::kinds::{self, Built, TerracedPlan};
-use crate::config::scene::{Scene, SceneError};
+use std::path::Path;
+
+use collide::Particle;
+use glam::{DQuat, DVec3};
+
+use crate::analysis::output::Drawing;
+use crate::analysis::smooth::Evaluate;
+use crate::config::init::{
+    Configuration, FileMolecules, MoleculeShape, read_attitudes, read_molecules, rod_semi_axes,
+};
+use crate::config::kinds::{self, Built, Kind, TerracedPlan, Visit};
+use crate::config::rods::Bodies;
+use crate::config::scene::{Orientations, Scene, SceneError};
+use crate::config::{flexible_scene, site_scene};
+use crate::engine::model::{HardSpheres, PairModel, Stepped};
 use crate::engine::potential::Potentials;
+use crate::models::rotor::TopInertia;
+
+/// What a built model is handed to (the driver's run, generic over the model).
+pub trait UseModel {
+    /// What it gives.
+    type Out;
+    /// Takes the model and, for a terraced scene, the smooth estimator of its potential.
+    fn use_model<M: PairModel + Send + 'static>(
+        self,
+        model: M,
+        smooth: Option<Box<dyn Evaluate>>,
+    ) -> Self::Out;
+}
+
+/// What building a model needs besides its plan.
+pub struct ModelStart<'a> {
+    /// The checked scene in internal units.
+    pub scene: &'a Scene,
+    /// The folder the scene's relative paths start from.
+    pub base: &'a Path,
+    /// The bodies' configuration.
+    pub config: &'a Configuration,
+    /// The state comes from a checkpoint afterwards (the model's own start is a placeholder).
+    pub resumed: bool,
+    /// The start file (`init.file` below `base`).
+    pub start_file: &'a Path,
+    /// A start file's angular velocities of rods, tops and rigid molecules.
+    pub omegas: Option<Vec<DVec3>>,
+    /// A start file's semi-flexible molecules ([`Plan::read_molecules`]).
+    pub molecules: Option<FileMolecules>,
+}
+
+/// How trajectory frames draw a plan's bodies ([`Plan::drawings`]).
+pub struct Drawings {
+    /// One per species.
+    pub species: Vec<Drawing>,
+    /// The site kinds of semi-flexible molecules with their diameters (else empty).
+    pub kinds: Vec<(String, f64)>,
+    /// The principal moments of each species' body frame (empty for bodies without one).
+    pub moments: Vec<[f64; 3]>,
+}
+
+/// Checks the keys of the scene's body kind, in the order that decides which error a bad scene
+/// reports: site molecules (and their bonds), or the pair tables of spheres and terraced
+/// bodies, with the other kinds' keys refused.
+///
+/// # Errors
+/// [`SceneError`] naming the key.
+pub fn check_bodies(scene: &Scene) -> Result<(), SceneError> {
+    if scene.has_sites() {
+        site_scene::check(scene)?;
+        if scene.has_bonds() {
+            flexible_scene::check(scene)?;
+        }
+    } else {
+        site_scene::refuse_site_keys(scene)?;
+        flexible_scene::refuse_keys(scene)?;
+        scene.check_pair_tables()?;
+    }
+    Ok(())
+}
 
 /// The interaction model a scene asks for, built (scene in internal units).
 pub enum Plan {
@@ -13,9 +91,9 @@ pub enum Plan {
     /// Rods or tops on the terraces of a smooth potential (its kind's tables).
     Terraced(TerracedPlan),
     /// Rigid site molecules with stepped site–site potentials.
-    Sites(crate::config::site_scene::SitesPlan),
+    Sites(site_scene::SitesPlan),
     /// Semi-flexible molecules (species with `bonds`): RATTLE between events.
-    Flexible(crate::config::flexible_scene::FlexiblePlan),
+    Flexible(flexible_scene::FlexiblePlan),
 }
 
 impl Plan {
@@ -25,14 +103,10 @@ impl Plan {
     /// [`SceneError::Invalid`] naming the pair table whose potential or terraces fail.
     pub fn of(scene: &Scene) -> Result<Plan, SceneError> {
         if scene.has_bonds() {
-            return Ok(Plan::Flexible(
-                crate::config::flexible_scene::FlexiblePlan::of(scene)?,
-            ));
+            return Ok(Plan::Flexible(flexible_scene::FlexiblePlan::of(scene)?));
         }
         if scene.has_sites() {
-            return Ok(Plan::Sites(crate::config::site_scene::SitesPlan::of(
-                scene,
-            )?));
+            return Ok(Plan::Sites(site_scene::SitesPlan::of(scene)?));
         }
         match scene.pair.first().and_then(|p| p.potential) {
             None => Ok(Plan::Spheres(Potentials::from_scene(scene))),
@@ -64,5 +138,297 @@ impl Plan {
             Plan::Sites(_) => "rigid-sites",
             Plan::Flexible(_) => "semi-flexible",
         }
+    }
+
+    /// Hard spheres (the model without levels).
+    pub fn is_hard_spheres(&self) -> bool {
+        matches!(self, Plan::Spheres(p) if p.all_hard_spheres())
+    }
+
+    /// Stepped radial potentials of spheres (what HMC's fault injection runs on).
+    pub fn is_spheres(&self) -> bool {
+        matches!(self, Plan::Spheres(_))
+    }
+
+    /// The bodies carry an attitude and angular velocity (rods, tops, rigid molecules), so a
+    /// start file may give their angular velocities.
+    pub fn rotates(&self) -> bool {
+        matches!(self, Plan::Terraced(_) | Plan::Sites(_))
+    }
+
+    /// The smallest hard-core diameter of stepped spheres (0 for other bodies): a lattice
+    /// denser than it allows holds no species.
+    pub fn smallest_core(&self) -> f64 {
+        let core = match self {
+            Plan::Spheres(potentials) => potentials
+                .all()
+                .iter()
+                .filter_map(|p| p.core())
+                .fold(f64::INFINITY, f64::min),
+            _ => 0.0,
+        };
+        if core.is_finite() { core } else { 0.0 }
+    }
+
+    /// The fewest events between re-basings by default. A signal stops a run at its next
+    /// re-basing, so the interval is also how long a stop can take: 10⁶ events of spheres or
+    /// rods take about a second; an event of rigid-site or semi-flexible molecules costs tens of
+    /// times more (site searches, RATTLE), so theirs is 10⁴, and a re-basing still costs about
+    /// 1 % of the run (every pair predicted once against `100 N` events).
+    pub fn fewest_rebase_events(&self) -> u64 {
+        match self {
+            Plan::Sites(_) | Plan::Flexible(_) => 10_000,
+            Plan::Spheres(_) | Plan::Terraced(_) => 1_000_000,
+        }
+    }
+
+    /// Semi-flexible molecules from a start file of their atoms (`None` for other bodies, and
+    /// for a file of the molecules' centres).
+    ///
+    /// # Errors
+    /// [`SceneError::Invalid`] naming `init.file` or `init.velocities` ([`read_molecules`]).
+    pub fn read_molecules(
+        &self,
+        scene: &Scene,
+        start_file: &Path,
+    ) -> Result<Option<FileMolecules>, SceneError> {
+        let Plan::Flexible(p) = self else {
+            return Ok(None);
+        };
+        let shapes: Vec<MoleculeShape> = p
+            .types
+            .iter()
+            .map(|t| MoleculeShape {
+                kinds: t
+                    .site_species()
+                    .iter()
+                    .map(|&k| p.kinds[k as usize].clone())
+                    .collect(),
+                masses: t.masses().to_vec(),
+            })
+            .collect();
+        read_molecules(scene, start_file, &shapes)
+    }
+
+    /// How trajectory frames draw each species: spheres of their hard-core diameter (or
+    /// innermost step), rods as the ellipsoids of their potential ([`rod_semi_axes`]), tops
+    /// as their kind draws them, rigid site molecules as their sites, semi-flexible molecules
+    /// as their atoms; with the moments of inertia of each species' body frame.
+    pub fn drawings(&self, scene: &Scene) -> Drawings {
+        let diameter =
+            |p: &crate::engine::potential::StepPotential| p.core().unwrap_or(p.radii()[0]);
+        let n = scene.species.len() as u32;
+        let rod = |name: &str| {
+            // The like pair's potential, else the first pair the species is in.
+            let pairs = || {
+                scene
+                    .pair
+                    .iter()
+                    .filter(|p| p.species.iter().any(|s| s == name))
+            };
+            pairs()
+                .find(|p| p.species[0] == p.species[1])
+                .into_iter()
+                .chain(pairs())
+                .find_map(|p| p.potential.as_ref().and_then(rod_semi_axes))
+                .unwrap_or([0.5; 3])
+        };
+        match self {
+            Plan::Spheres(potentials) => Drawings {
+                species: (0..n)
+                    .map(|s| Drawing::Sphere {
+                        diameter: diameter(potentials.get(s, s)),
+                    })
+                    .collect(),
+                kinds: Vec::new(),
+                moments: Vec::new(),
+            },
+            Plan::Terraced(t) => Drawings {
+                species: scene
+                    .species
+                    .iter()
+                    .map(|s| match t.spec.describe().drawing() {
+                        Drawing::Rod { .. } => Drawing::Rod {
+                            semi_axes: rod(&s.name),
+                        },
+                        d => d,
+                    })
+                    .collect(),
+                kinds: Vec::new(),
+                // A rod's moments, or a top's as its model takes them (a rounded planar body
+                // made planar).
+                moments: scene
+                    .species
+                    .iter()
+                    .map(|s| match (s.inertia, s.moments) {
+                        (Some(i), _) => [i, i, 0.0],
+                        (None, Some(m)) => {
+                            TopInertia::new(DVec3::from(m)).map_or(m, |t| t.principal().to_array())
+                        }
+                        (None, None) => [0.0; 3],
+                    })
+                    .collect(),
+            },
+            Plan::Sites(p) => Drawings {
+                species: p
+                    .types
+                    .iter()
+                    .map(|t| Drawing::Sites {
+                        centres: t.sites().to_vec(),
+                        diameters: t
+                            .site_species()
+                            .iter()
+                            .map(|&k| diameter(p.potentials.get(k, k)))
+                            .collect(),
+                    })
+                    .collect(),
+                kinds: Vec::new(),
+                moments: p.types.iter().map(|t| t.moments().to_array()).collect(),
+            },
+            Plan::Flexible(p) => Drawings {
+                species: p
+                    .types
+                    .iter()
+                    .map(|t| Drawing::Atoms {
+                        kinds: t.site_species().to_vec(),
+                        masses: t.masses().to_vec(),
+                    })
+                    .collect(),
+                kinds: p
+                    .kinds
+                    .iter()
+                    .enumerate()
+                    .map(|(k, name)| (name.clone(), diameter(p.potentials.get(k as u32, k as u32))))
+                    .collect(),
+                moments: Vec::new(),
+            },
+        }
+    }
+
+    /// The general stepped model of sphere scenes, which HMC's fault injection runs on, with
+    /// the smooth estimator of Lennard-Jones spheres on terraces.
+    ///
+    /// # Errors
+    /// [`SceneError::Invalid`] naming `hmc.fault_fraction` for other bodies.
+    pub fn fault_model(
+        self,
+        scene: &Scene,
+        config: &Configuration,
+    ) -> Result<(Stepped, Option<Box<dyn Evaluate>>), SceneError> {
+        let Plan::Spheres(potentials) = self else {
+            return Err(SceneError::invalid(
+                "hmc.fault_fraction",
+                "fault injection hides pairs of the analytic sphere models; it is not available \
+                 for rods"
+                    .to_owned(),
+            ));
+        };
+        let n = config.positions.len();
+        Ok((
+            Stepped::new(potentials, particles(scene), n),
+            radial_smooth(scene, config)?,
+        ))
+    }
+
+    /// Builds the model of the plan from `start` and hands it to `user`.
+    ///
+    /// # Errors
+    /// [`SceneError`] of a start the model refuses (overlaps, unreadable attitudes …).
+    pub fn build<U: UseModel>(self, start: ModelStart<'_>, user: U) -> Result<U::Out, SceneError> {
+        let ModelStart {
+            scene,
+            base,
+            config,
+            resumed,
+            start_file,
+            omegas,
+            molecules,
+        } = start;
+        let n = config.positions.len();
+        Ok(match self {
+            Plan::Spheres(potentials) => {
+                let smooth = radial_smooth(scene, config)?;
+                if potentials.all_hard_spheres() {
+                    user.use_model(HardSpheres::new(potentials, particles(scene)), smooth)
+                } else {
+                    user.use_model(Stepped::new(potentials, particles(scene), n), smooth)
+                }
+            }
+            Plan::Terraced(plan) => {
+                let spec = plan.spec;
+                spec.visit(TerracedBuild {
+                    scene,
+                    base,
+                    config,
+                    plan,
+                    omegas: omegas.as_deref(),
+                    user,
+                })?
+            }
+            Plan::Sites(plan) => {
+                let attitudes: Option<Vec<DQuat>> = match (resumed, scene.init.orientations) {
+                    (false, Orientations::File) => {
+                        Some(read_attitudes(scene, start_file, n, "init.orientations")?)
+                    }
+                    _ => None,
+                };
+                let model = site_scene::model(scene, config, plan, resumed, attitudes, omegas)?;
+                user.use_model(model, None)
+            }
+            Plan::Flexible(plan) => {
+                let start = molecules.map(|m| (m.atoms, m.internal));
+                let model = flexible_scene::model(scene, config, plan, resumed, start)?;
+                user.use_model(model, None)
+            }
+        })
+    }
+}
+
+/// Lennard-Jones spheres on terraces run as radial steps; their smooth potential is still the
+/// scene's: its estimator (none for other spheres).
+fn radial_smooth(
+    scene: &Scene,
+    config: &Configuration,
+) -> Result<Option<Box<dyn Evaluate>>, SceneError> {
+    if scene.has_terraced_smooth_potential() {
+        kinds::radial_estimator(scene, config.lengths)
+    } else {
+        Ok(None)
+    }
+}
+
+/// The scene's species as particles of their masses.
+fn particles(scene: &Scene) -> Vec<Particle> {
+    scene
+        .species
+        .iter()
+        .map(|s| Particle::new(s.mass).expect("masses are checked"))
+        .collect()
+}
+
+/// Builds the terraced model of kind `K` (and its smooth estimator) from its plan.
+struct TerracedBuild<'a, U> {
+    scene: &'a Scene,
+    base: &'a Path,
+    config: &'a Configuration,
+    plan: TerracedPlan,
+    omegas: Option<&'a [DVec3]>,
+    user: U,
+}
+
+impl<U: UseModel> Visit for TerracedBuild<'_, U> {
+    type Out = Result<U::Out, SceneError>;
+
+    fn visit<K: Kind>(self, _: &K) -> Self::Out {
+        let tables = self.plan.take::<K>();
+        let smooth = <K::Terraced as Bodies>::estimator(self.scene, self.config.lengths, &tables)?;
+        let model = <K::Terraced as Bodies>::model(
+            self.scene,
+            self.base,
+            self.config,
+            tables,
+            self.omegas,
+        )?;
+        Ok(self.user.use_model(model, smooth))
     }
 }

@@ -9,26 +9,21 @@ use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Instant;
 
-use collide::Particle;
 use event_queue::{BoundedQueue, HeapQueue, LazyQueue, Ticket, TournamentTree};
 use glam::DVec3;
 use serde::Serialize;
 
 use crate::analysis::observable::{Correlations, Observers, Rdf, Series};
 use crate::analysis::output::{
-    Drawing, GsdTrajectory, Layout, OutputError, Trajectory, element_of, write_atomically,
-    write_csv,
+    GsdTrajectory, Layout, OutputError, Trajectory, element_of, write_atomically, write_csv,
 };
 use crate::config::init::{
-    Configuration, MoleculeShape, ase_momentum_unit, lattice, maxwell_boltzmann, read_attitudes,
-    read_molecules, read_motion, read_xyz, rod_semi_axes,
+    Configuration, ase_momentum_unit, lattice, maxwell_boltzmann, read_motion, read_xyz,
 };
-use crate::config::kinds::{Kind, TerracedPlan, Visit};
-use crate::config::plan::Plan;
-use crate::config::rods::Bodies;
+use crate::config::plan::{Drawings, ModelStart, Plan, UseModel};
 use crate::config::scene::{
-    AcceptKind, EnsembleKind, MeasureKind, Orientations, Positions, QueueKind, Scene, SceneError,
-    ThermostatKind, ThermostatPhase, Velocities,
+    AcceptKind, EnsembleKind, MeasureKind, Positions, QueueKind, Scene, SceneError, ThermostatKind,
+    ThermostatPhase, Velocities,
 };
 use crate::config::units::Units;
 use crate::driver::checkpoint::{
@@ -40,7 +35,7 @@ pub use crate::driver::reporting::{
     ObservableTable, PhaseEnd, Quiet, Reporter, RunError, RunPlan, thread_cpu_seconds,
 };
 use crate::driver::reporting::{PlotInfo, observable_tables, terrace_step, write_observables};
-use crate::engine::model::{HardSpheres, PairModel, Stepped};
+use crate::engine::model::PairModel;
 use crate::engine::schedule::Scheduler;
 use crate::engine::simulation::MAX_REBASE_EVENTS;
 
@@ -52,7 +47,6 @@ const RESUME_DRIFT: f64 = 1e-2;
 
 use crate::analysis::output::short;
 use crate::engine::simulation::{Andersen, LoopSettings, Progress, SetupError, Simulation, Stop};
-use crate::models::rotor::TopInertia;
 use crate::models::search::SearchStats;
 
 /// What a run does besides the scene: checkpoints, and resuming from one.
@@ -317,19 +311,6 @@ pub fn check_setup(
     Ok(())
 }
 
-/// The fewest events between re-basings by default (the default is `100 N` within this and
-/// [`MAX_REBASE_EVENTS`]). A signal stops a run at its next re-basing, so the interval is also
-/// how long a stop can take: 10⁶ events of spheres or rods take about a second; an event of
-/// rigid-site or semi-flexible molecules costs tens of times more (site searches, RATTLE), so
-/// theirs is 10⁴, and a re-basing still costs about 1 % of the run (every pair predicted once
-/// against `100 N` events).
-fn fewest_rebase_events(plan: &Plan) -> u64 {
-    match plan {
-        Plan::Sites(_) | Plan::Flexible(_) => 10_000,
-        Plan::Spheres(_) | Plan::Terraced(_) => 1_000_000,
-    }
-}
-
 /// What a scene's run is built with besides its state ([`build_run`]).
 #[derive(Clone, Debug)]
 pub struct Built {
@@ -456,41 +437,15 @@ fn set_up<G: Go>(
     let plan = Plan::of(scene)?;
     // A lattice denser than the smallest hard core allows can hold no species; pairs of larger
     // cores that end up too close are reported by the set-up.
-    let smallest_core = match &plan {
-        Plan::Spheres(potentials) => potentials
-            .all()
-            .iter()
-            .filter_map(|p| p.core())
-            .fold(f64::INFINITY, f64::min),
-        _ => 0.0,
-    };
-    let smallest_core = if smallest_core.is_finite() {
-        smallest_core
-    } else {
-        0.0
-    };
+    let smallest_core = plan.smallest_core();
     if let Some((path, c)) = &options.resume {
         check_checkpoint_scene(scene, path, c)?;
     }
     let layout = layout_of(scene, &plan, &units);
     let start_file = base.join(scene.init.file.as_deref().unwrap_or(Path::new("")));
     // Semi-flexible molecules start from a file of their atoms (or of their centres).
-    let molecules = match (&options.resume, scene.init.positions, &plan) {
-        (None, Positions::File, Plan::Flexible(p)) => {
-            let shapes: Vec<MoleculeShape> = p
-                .types
-                .iter()
-                .map(|t| MoleculeShape {
-                    kinds: t
-                        .site_species()
-                        .iter()
-                        .map(|&k| p.kinds[k as usize].clone())
-                        .collect(),
-                    masses: t.masses().to_vec(),
-                })
-                .collect();
-            read_molecules(scene, &start_file, &shapes)?
-        }
+    let molecules = match (&options.resume, scene.init.positions) {
+        (None, Positions::File) => plan.read_molecules(scene, &start_file)?,
         _ => None,
     };
     let config = match (&options.resume, scene.init.positions) {
@@ -514,7 +469,7 @@ fn set_up<G: Go>(
         .collect();
     // A start file's own velocities (and angular velocities of rods, tops and site
     // molecules), or Maxwell–Boltzmann ones; a resumed run takes its state from the checkpoint.
-    let rotating = matches!(plan, Plan::Terraced(_) | Plan::Sites(_));
+    let rotating = plan.rotates();
     let moments: Vec<[f64; 3]> = if rotating {
         config
             .species
@@ -546,14 +501,14 @@ fn set_up<G: Go>(
         .map(|im| crate::config::init::wrapped_images(im, &config.positions, config.lengths));
     let omegas = motion.and_then(|m| m.omegas);
     let n = config.positions.len();
-    let hard = matches!(&plan, Plan::Spheres(p) if p.all_hard_spheres());
+    let hard = plan.is_hard_spheres();
     let skin = match &options.resume {
         Some((_, c)) => c.sim.settings.3,
         None => choose_skin(scene, plan.reach(), hard, &config)?,
     };
     let mut settings = LoopSettings {
         rebase_events: scene.run.rebase_events.unwrap_or_else(|| {
-            (100 * n as u64).clamp(fewest_rebase_events(&plan), MAX_REBASE_EVENTS)
+            (100 * n as u64).clamp(plan.fewest_rebase_events(), MAX_REBASE_EVENTS)
         }),
         seed: scene.seed.wrapping_add(0x7e57_0000_0000_0001),
         debug_check_events: (n as u64).max(1000),
@@ -592,7 +547,6 @@ fn set_up<G: Go>(
             message: e.to_string(),
         })?;
     }
-    type Bounded = LazyQueue<BoundedQueue<Ticket>>;
     type Heap = LazyQueue<HeapQueue<Ticket>>;
     // HMC fault injection (a validation tool) runs on the general stepped model; missed
     // events break the loop's invariants on purpose, so the debug checks are off.
@@ -614,182 +568,52 @@ fn set_up<G: Go>(
         layout,
         set_up_only,
     };
-    // Lennard-Jones spheres on terraces run as radial steps; their smooth potential is still
-    // the scene's.
-    if matches!(plan, Plan::Spheres(_)) && scene.has_terraced_smooth_potential() {
-        ctx.smooth.set(crate::config::kinds::radial_estimator(
-            scene,
-            config.lengths,
-        )?);
-    }
     if fault > 0.0 {
         // Checked with the scene: fault injection is for sphere scenes.
-        let Plan::Spheres(potentials) = plan else {
-            return Err(SceneError::invalid(
-                "hmc.fault_fraction",
-                "fault injection hides pairs of the analytic sphere models; it is not available \
-                 for rods"
-                    .to_owned(),
-            )
-            .into());
-        };
-        let particles: Vec<Particle> = scene
-            .species
-            .iter()
-            .map(|s| Particle::new(s.mass).expect("masses are checked"))
-            .collect();
-        let model = Stepped::new(potentials, particles, n);
+        let (model, smooth) = plan.fault_model(scene, &config)?;
+        ctx.smooth.set(smooth);
         return g.go::<_, Heap>(&ctx, model);
     }
-    let resumed = options.resume.is_some();
-    match plan {
-        Plan::Spheres(potentials) => {
-            let particles: Vec<Particle> = scene
-                .species
-                .iter()
-                .map(|s| Particle::new(s.mass).expect("masses are checked"))
-                .collect();
-            match (hard, scene.run.queue) {
-                (true, QueueKind::Bounded) => {
-                    g.go::<_, Bounded>(&ctx, HardSpheres::new(potentials, particles))
-                }
-                (true, QueueKind::Heap) => {
-                    g.go::<_, Heap>(&ctx, HardSpheres::new(potentials, particles))
-                }
-                (true, QueueKind::Tournament) => {
-                    g.go::<_, TournamentTree>(&ctx, HardSpheres::new(potentials, particles))
-                }
-                (false, QueueKind::Bounded) => {
-                    g.go::<_, Bounded>(&ctx, Stepped::new(potentials, particles, n))
-                }
-                (false, QueueKind::Heap) => {
-                    g.go::<_, Heap>(&ctx, Stepped::new(potentials, particles, n))
-                }
-                (false, QueueKind::Tournament) => {
-                    g.go::<_, TournamentTree>(&ctx, Stepped::new(potentials, particles, n))
-                }
-            }
-        }
-        Plan::Terraced(plan) => {
-            let spec = plan.spec;
-            spec.visit(TerracedGo {
-                ctx: &ctx,
-                g,
-                plan,
-                base,
-                omegas: omegas.as_deref(),
-            })
-        }
-        Plan::Sites(plan) => {
-            let attitudes = match (&options.resume, scene.init.orientations) {
-                (None, Orientations::File) => {
-                    Some(read_attitudes(scene, &start_file, n, "init.orientations")?)
-                }
-                _ => None,
-            };
-            let model =
-                crate::config::site_scene::model(scene, &config, plan, resumed, attitudes, omegas)?;
-            go_any_queue(&ctx, g, model)
-        }
-        Plan::Flexible(plan) => {
-            let start = molecules.map(|m| (m.atoms, m.internal));
-            let model = crate::config::flexible_scene::model(scene, &config, plan, resumed, start)?;
-            go_any_queue(&ctx, g, model)
-        }
+    let start = ModelStart {
+        scene,
+        base,
+        config: &config,
+        resumed: options.resume.is_some(),
+        start_file: &start_file,
+        omegas,
+        molecules,
+    };
+    plan.build(start, Start { ctx: &ctx, g })?
+}
+
+/// Runs `g` on the model a plan built, on the scene's queue.
+struct Start<'a, G> {
+    ctx: &'a Context<'a>,
+    g: G,
+}
+
+impl<G: Go> UseModel for Start<'_, G> {
+    type Out = Result<G::Out, RunError>;
+
+    fn use_model<M: PairModel + Send + 'static>(
+        self,
+        model: M,
+        smooth: Option<Box<dyn crate::analysis::smooth::Evaluate>>,
+    ) -> Self::Out {
+        self.ctx.smooth.set(smooth);
+        go_any_queue(self.ctx, self.g, model)
     }
 }
 
-/// How trajectory frames draw each species of a scene: spheres of their hard-core diameter (or
-/// innermost step), rods as the ellipsoids of their potential ([`rod_semi_axes`]), rigid site
-/// molecules as their sites, semi-flexible molecules as their atoms; with each species'
+/// How trajectory frames draw each species of a scene ([`Plan::drawings`]), with each species'
 /// element, its moments of inertia and the unit of the momenta (`units`: the scene's system).
 fn layout_of(scene: &Scene, plan: &Plan, units: &Units) -> Layout {
-    let diameter = |p: &crate::engine::potential::StepPotential| p.core().unwrap_or(p.radii()[0]);
     let species: Vec<String> = scene.species.iter().map(|s| s.name.clone()).collect();
-    let n = species.len() as u32;
-    let rod = |name: &str| {
-        // The like pair's potential, else the first pair the species is in.
-        let pairs = || {
-            scene
-                .pair
-                .iter()
-                .filter(|p| p.species.iter().any(|s| s == name))
-        };
-        pairs()
-            .find(|p| p.species[0] == p.species[1])
-            .into_iter()
-            .chain(pairs())
-            .find_map(|p| p.potential.as_ref().and_then(rod_semi_axes))
-            .unwrap_or([0.5; 3])
-    };
-    // A rod's moments, or a top's as its model takes them (a rounded planar body made planar).
-    let rotor_moments = || -> Vec<[f64; 3]> {
-        scene
-            .species
-            .iter()
-            .map(|s| match (s.inertia, s.moments) {
-                (Some(i), _) => [i, i, 0.0],
-                (None, Some(m)) => {
-                    TopInertia::new(DVec3::from(m)).map_or(m, |t| t.principal().to_array())
-                }
-                (None, None) => [0.0; 3],
-            })
-            .collect()
-    };
-    let (drawings, kinds, moments) = match plan {
-        Plan::Spheres(potentials) => (
-            (0..n)
-                .map(|s| Drawing::Sphere {
-                    diameter: diameter(potentials.get(s, s)),
-                })
-                .collect(),
-            Vec::new(),
-            Vec::new(),
-        ),
-        Plan::Terraced(t) => (
-            species
-                .iter()
-                .map(|name| match t.spec.describe().drawing() {
-                    Drawing::Rod { .. } => Drawing::Rod {
-                        semi_axes: rod(name),
-                    },
-                    d => d,
-                })
-                .collect(),
-            Vec::new(),
-            rotor_moments(),
-        ),
-        Plan::Sites(p) => (
-            p.types
-                .iter()
-                .map(|t| Drawing::Sites {
-                    centres: t.sites().to_vec(),
-                    diameters: t
-                        .site_species()
-                        .iter()
-                        .map(|&k| diameter(p.potentials.get(k, k)))
-                        .collect(),
-                })
-                .collect(),
-            Vec::new(),
-            p.types.iter().map(|t| t.moments().to_array()).collect(),
-        ),
-        Plan::Flexible(p) => (
-            p.types
-                .iter()
-                .map(|t| Drawing::Atoms {
-                    kinds: t.site_species().to_vec(),
-                    masses: t.masses().to_vec(),
-                })
-                .collect(),
-            p.kinds
-                .iter()
-                .enumerate()
-                .map(|(k, name)| (name.clone(), diameter(p.potentials.get(k as u32, k as u32))))
-                .collect(),
-            Vec::new(),
-        ),
-    };
+    let Drawings {
+        species: drawings,
+        kinds,
+        moments,
+    } = plan.drawings(scene);
     let mut layout = Layout::new(species, drawings);
     layout.elements = scene
         .species
@@ -804,32 +628,6 @@ fn layout_of(scene: &Scene, plan: &Plan, units: &Units) -> Layout {
     layout.moments = moments;
     layout.momentum_unit = ase_momentum_unit(units.system);
     layout
-}
-
-/// Builds the terraced model of kind `K` from its plan and runs `g` on it.
-struct TerracedGo<'a, G> {
-    ctx: &'a Context<'a>,
-    g: G,
-    plan: TerracedPlan,
-    base: &'a Path,
-    omegas: Option<&'a [DVec3]>,
-}
-
-impl<G: Go> Visit for TerracedGo<'_, G> {
-    type Out = Result<G::Out, RunError>;
-
-    fn visit<K: Kind>(self, _: &K) -> Self::Out {
-        let ctx = self.ctx;
-        let tables = self.plan.take::<K>();
-        ctx.smooth.set(<K::Terraced as Bodies>::estimator(
-            ctx.scene,
-            ctx.config.lengths,
-            &tables,
-        )?);
-        let model =
-            <K::Terraced as Bodies>::model(ctx.scene, self.base, ctx.config, tables, self.omegas)?;
-        go_any_queue(ctx, self.g, model)
-    }
 }
 
 struct Context<'a> {

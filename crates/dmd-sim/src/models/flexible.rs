@@ -87,10 +87,11 @@ use rand_xoshiro::Xoshiro256PlusPlus;
 use root_search::SearchError;
 
 use crate::engine::event::{Boundary, Kind};
+use crate::engine::hash::mix;
 use crate::engine::model::{Executed, Pair, PairClass, PairModel, PairSetupError, Report};
 use crate::engine::potential::Potentials;
 use crate::engine::saved::{StateReader, push_count};
-use crate::models::search::{SearchSettings, SearchStats, check_settings, mix};
+use crate::models::search::{SearchSettings, SearchStats, check_settings};
 use crate::models::site_pairs::{Pending, SiteAtom, SiteDistance, SiteSearch, SiteTable};
 
 pub use rattle::{Constraints, RattleError, Trajectory};

@@ -9,13 +9,12 @@ use glam::DVec3;
 use root_search::{Adaptive, Crossing, Grid, Method, SearchState};
 
 use crate::engine::event::{Boundary, Kind};
+use crate::engine::hash::mix;
 use crate::engine::model::{Pair, PairClass, PairSetupError};
 use crate::engine::pair_state::{SavedSearches, SiteLevels};
 use crate::engine::potential::{Level, Potentials};
 use crate::engine::saved::StateReader;
-use crate::models::search::{
-    SearchMethod, SearchSettings, SearchStats, bracket, jitter_factor, mix,
-};
+use crate::models::search::{SearchMethod, SearchSettings, SearchStats, bracket, jitter_factor};
 
 /// Relative tolerance on squared site distances below which an overlap counts as round-off.
 pub const SITE_OVERLAP_TOLERANCE: f64 = 1e-9;

@@ -73,10 +73,11 @@ use rigid_free::{FreeMotion, Moments};
 use root_search::SearchError;
 
 use crate::engine::event::{Boundary, Kind};
+use crate::engine::hash::mix;
 use crate::engine::model::{Executed, Pair, PairClass, PairModel, PairSetupError, Report};
 use crate::engine::potential::Potentials;
 use crate::engine::saved::StateReader;
-use crate::models::search::{SearchSettings, SearchStats, check_settings, mix};
+use crate::models::search::{SearchSettings, SearchStats, check_settings};
 use crate::models::site_pairs::{SiteAtom, SiteDistance, SiteSearch, SiteTable};
 
 /// Moments within this fraction of the largest are made equal (and a smallest moment below it

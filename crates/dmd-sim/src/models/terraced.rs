@@ -56,12 +56,11 @@ use rigid_free::LinearRotor;
 use root_search::{Adaptive, Crossing, Grid, Method, SearchError, SearchState};
 
 use crate::engine::event::{Boundary, Kind};
+use crate::engine::hash::mix;
 use crate::engine::model::{Executed, Pair, PairClass, PairModel, PairSetupError, Report};
 use crate::engine::pair_state::{PairStates, SavedSearches};
 use crate::models::rotor::{Rotor, Top};
-use crate::models::search::{
-    SearchMethod, SearchSettings, SearchStats, bracket, jitter_factor, mix,
-};
+use crate::models::search::{SearchMethod, SearchSettings, SearchStats, bracket, jitter_factor};
 
 /// One body's free rotation since its last change at time `t`.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -308,6 +308,28 @@ fn only_the_kinds_branch_on_the_kind_of_potential() {
     );
 }
 
+/// The body kinds are decided in one place: only `config::plan` names a `Plan` variant (the
+/// driver asks the plan what it needs of a body kind and receives the model as a type), so a
+/// new body model adds a variant there and its own model and scene modules, nothing else.
+#[test]
+fn only_the_plan_branches_on_the_body_kind() {
+    let mut wrong = Vec::new();
+    for (m, file) in modules(&src_dir()) {
+        let text = std::fs::read_to_string(&file).expect("readable");
+        let part = library_part(&text);
+        let names_a_variant = ["Spheres", "Terraced", "Sites", "Flexible"]
+            .iter()
+            .any(|v| part.contains(&format!("Plan::{v}")));
+        if m != ["config", "plan"] && names_a_variant {
+            wrong.push(show(&m));
+        }
+    }
+    assert!(
+        wrong.is_empty(),
+        "modules outside config::plan naming a body kind: {wrong:?}"
+    );
+}
+
 #[test]
 fn the_checks_see_the_edges_they_judge() {
     // The parser itself: use lists, nested groups, inline paths and doc links.
