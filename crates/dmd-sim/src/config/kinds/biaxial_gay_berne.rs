@@ -373,7 +373,7 @@ impl Describe for BiaxialGayBerneSpec {
             return Err(SceneError::invalid(
                 key("sigma_c"),
                 format!(
-                    "{sc} (length) exceeds twice the shortest semi-axis, {}: the energy must \
+                    "{sc} (length) exceeds {}, twice the shortest semi-axis: the energy must \
                      become infinite before the centres meet",
                     2.0 * self.min_semi_axis()
                 ),
