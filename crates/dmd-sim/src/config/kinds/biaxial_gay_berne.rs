@@ -238,7 +238,7 @@ impl RigidPairPotential for BiaxialGayBerne {
         let bb = n.dot(beta);
         let sigma12 = (2.0 / gg).sqrt();
         let d = r - sigma12 + self.sigma_c;
-        if !(d > 0.0) {
+        if d.is_nan() || d <= 0.0 {
             return Err(Self::overlap(r, "r − σ₁₂ + σ_c ≤ 0"));
         }
         let rho = self.sigma_c / d;
