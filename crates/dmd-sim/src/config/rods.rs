@@ -14,8 +14,8 @@ use std::path::Path;
 
 use glam::DVec3;
 use potential::{
-    Layout, LevelSet, NearMinimum, PairPotential, Placement, Profile, StepEnergy, Steps,
-    TerraceMap, TerraceOptions,
+    Layout, LevelSet, NearMinimum, PairPotential, Placement, Profile, RigidPairPotential,
+    StepEnergy, Steps, TerraceMap, TerraceOptions,
 };
 use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
@@ -83,13 +83,13 @@ pub(crate) fn plain_terrace_map(
 ///
 /// # Errors
 /// [`SceneError::Invalid`] naming `search` when the model refuses its settings.
-pub fn tops_model(
+pub fn tops_model<P: RigidPairPotential>(
     scene: &Scene,
     body_species: &[u32],
-    tables: Vec<PairTable<Water>>,
+    tables: Vec<PairTable<Rigid<P>>>,
     attitudes: Option<Vec<glam::DQuat>>,
     omegas: Option<Vec<DVec3>>,
-) -> Result<Terraced<Water>, SceneError> {
+) -> Result<Terraced<Rigid<P>>, SceneError> {
     let species: Vec<BodySpecies<TopInertia>> = scene
         .species
         .iter()
@@ -170,22 +170,23 @@ impl<P: PairPotential + Clone + std::fmt::Debug + Send + 'static> Bodies for P {
     }
 }
 
-/// SSD/E acts between rigid tops.
-impl Bodies for Water {
+/// Potentials that read whole attitudes (SSD/E water, biaxial ellipsoids) act between rigid
+/// tops.
+impl<P: RigidPairPotential + Clone + std::fmt::Debug + Send + 'static> Bodies for Rigid<P> {
     fn model(
         scene: &Scene,
         base: &Path,
         config: &Configuration,
-        tables: Vec<PairTable<Water>>,
+        tables: Vec<PairTable<Rigid<P>>>,
         omegas: Option<&[DVec3]>,
-    ) -> Result<Terraced<Water>, SceneError> {
+    ) -> Result<Terraced<Rigid<P>>, SceneError> {
         tops_model_of(scene, base, config, tables, omegas)
     }
 
     fn estimator(
         scene: &Scene,
         lengths: DVec3,
-        tables: &[PairTable<Water>],
+        tables: &[PairTable<Rigid<P>>],
     ) -> Result<Option<Box<dyn crate::analysis::smooth::Evaluate>>, SceneError> {
         tops_estimator(scene, lengths, tables)
     }
@@ -197,13 +198,13 @@ impl Bodies for Water {
 /// # Errors
 /// As [`tops_model`], and [`SceneError::Invalid`] naming `init.velocities` or
 /// `init.orientations` for a file without attitudes.
-pub fn tops_model_of(
+pub fn tops_model_of<P: RigidPairPotential>(
     scene: &Scene,
     base: &Path,
     config: &Configuration,
-    tables: Vec<PairTable<Water>>,
+    tables: Vec<PairTable<Rigid<P>>>,
     omegas: Option<&[DVec3]>,
-) -> Result<Terraced<Water>, SceneError> {
+) -> Result<Terraced<Rigid<P>>, SceneError> {
     let file = || base.join(scene.init.file.as_ref().expect("checked"));
     let n = config.positions.len();
     let attitudes = match (omegas, scene.init.orientations) {
@@ -697,25 +698,35 @@ fn cutoff_fits(
     }
 }
 
-/// The estimator of a scene of SSD/E tops (in internal units): the terraced pairs' own smooth
-/// potentials, each zero beyond its cut-off (9 Å), or `None` when the scene does not want one
-/// (`output.smooth_estimators = false` or no `output.sample_interval`) or the cut-off does not
-/// fit the box (then an explicit `output.smooth_estimators = true` is an error).
+/// The estimator of a scene of rigid tops (in internal units): the terraced pairs' own smooth
+/// potentials, each zero beyond its own cut-off (the kind's `own_window`; 9 Å for SSD/E), or
+/// `None` when the scene does not want one (`output.smooth_estimators = false` or no
+/// `output.sample_interval`) or the cut-off does not fit the box (then an explicit
+/// `output.smooth_estimators = true` is an error).
 ///
 /// # Errors
-/// [`SceneError::Invalid`] naming `output.smooth_estimators`.
-pub fn tops_estimator(
+/// [`SceneError::Invalid`] naming `output.smooth_estimators`, or the pair table whose
+/// potential has no cut-off of its own.
+pub fn tops_estimator<P: RigidPairPotential + Clone + std::fmt::Debug + Send + 'static>(
     scene: &Scene,
     lengths: DVec3,
-    tables: &[PairTable<Water>],
+    tables: &[PairTable<Rigid<P>>],
 ) -> Result<Option<Box<dyn crate::analysis::smooth::Evaluate>>, SceneError> {
     if !scene.wants_smooth_estimators() {
         return Ok(None);
     }
-    let cutoff = tables
-        .iter()
-        .map(|(_, t)| t.potential().0.cutoff())
-        .fold(0.0, f64::max);
+    let mut cutoff = 0.0f64;
+    for (k, p) in scene.pair.iter().enumerate() {
+        let own = p.potential.and_then(|q| q.describe().own_window());
+        let Some((_, r_cut)) = own else {
+            return Err(SceneError::invalid(
+                format!("pair[{k}].potential"),
+                "a potential between rigid tops needs a cut-off of its own (zero beyond it) \
+                 for its smooth estimator",
+            ));
+        };
+        cutoff = cutoff.max(r_cut);
+    }
     let why = |half: f64| {
         format!(
             "the potential's cut-off {cutoff} reaches half the shortest box side {half:.6}: a \
@@ -727,7 +738,7 @@ pub fn tops_estimator(
     }
     let pots = tables
         .iter()
-        .map(|((a, b), t)| ((*a, *b), t.potential().0))
+        .map(|((a, b), t)| ((*a, *b), t.potential().0.clone()))
         .collect();
     Ok(Some(Box::new(
         crate::analysis::smooth::RigidEstimator::new(scene.species.len(), pots, cutoff),

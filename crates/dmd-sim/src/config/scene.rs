@@ -499,6 +499,8 @@ pub enum PotentialSpec {
     SsdE(SsdESpec),
     /// Stockmayer rods: Lennard-Jones plus a point dipole along each body's axis.
     Stockmayer(StockmayerSpec),
+    /// Biaxial Gay–Berne ellipsoids (Berardi, Fava and Zannoni) between rigid tops.
+    BiaxialGayBerne(BiaxialGayBerneSpec),
 }
 
 impl PotentialSpec {
@@ -510,6 +512,7 @@ impl PotentialSpec {
             PotentialSpec::GayBerne(k) => k,
             PotentialSpec::SsdE(k) => k,
             PotentialSpec::Stockmayer(k) => k,
+            PotentialSpec::BiaxialGayBerne(k) => k,
         }
     }
 
@@ -521,6 +524,7 @@ impl PotentialSpec {
             PotentialSpec::GayBerne(k) => k,
             PotentialSpec::SsdE(k) => k,
             PotentialSpec::Stockmayer(k) => k,
+            PotentialSpec::BiaxialGayBerne(k) => k,
         }
     }
 
@@ -668,6 +672,37 @@ pub struct StockmayerSpec {
     pub sigma: f64,
     /// Dipole moment μ (`μ²` an energy × length³).
     pub dipole: f64,
+}
+
+/// The keys of `kind = "biaxial-gay-berne"` (`config::kinds::biaxial_gay_berne`): bodies are
+/// rigid tops with `moments` about the body axes the semi-axes and well depths are given along.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct BiaxialGayBerneSpec {
+    /// Semi-axes `[σ_x, σ_y, σ_z]` (length) along the body axes.
+    pub semi_axes: [f64; 3],
+    /// Energy scale ε₀.
+    pub epsilon0: f64,
+    /// Relative well depths `[ε_x, ε_y, ε_z]` (dimensionless) of contacts along the body axes
+    /// (default `[1, 1, 1]`).
+    #[serde(default = "ones")]
+    pub epsilon: [f64; 3],
+    /// Exponent μ of the strength term (default 2).
+    #[serde(default = "mu")]
+    pub mu: f64,
+    /// Exponent ν of the shape term (default 1).
+    #[serde(default = "nu")]
+    pub nu: f64,
+    /// Softness σ_c (length; default twice the shortest semi-axis).
+    pub sigma_c: Option<f64>,
+    /// Where the switch to zero starts (length; default `2 max σ_k + 1.5σ_c`).
+    pub r_switch: Option<f64>,
+    /// Where the potential ends (length; default `2 max σ_k + 2σ_c`).
+    pub r_cut: Option<f64>,
+}
+
+fn ones() -> [f64; 3] {
+    [1.0; 3]
 }
 
 /// Where the terrace levels go (see `potential::Placement`).
@@ -1848,14 +1883,15 @@ impl Scene {
                         format!("species[{k}].moments"),
                         "needed: the potential reads the whole attitude of each body, so the \
                          bodies are rigid tops with principal moments [I_x, I_y, I_z] about \
-                         their body axes (water: [1.7696, 0.6145, 1.1550] g/mol·Å²)",
+                         their body axes (water: [1.7696, 0.6145, 1.1550] g/mol·Å²; a uniform \
+                         ellipsoid of semi-axes a, b, c: m/5·[b² + c², a² + c², a² + b²])",
                     ));
                 }
                 (Some(_), false) => {
                     return Err(SceneError::invalid(
                         format!("species[{k}].moments"),
-                        "only bodies of a potential that reads whole attitudes (`ssd-e`) have \
-                         three moments: remove the key",
+                        "only bodies of a potential that reads whole attitudes (`ssd-e`, \
+                         `biaxial-gay-berne`) have three moments: remove the key",
                     ));
                 }
                 (None, false) => {}

@@ -122,17 +122,18 @@ pub fn check(scene: &Scene) -> Result<(), SceneError> {
              which have no continuous force; run them with the event-driven engine",
         );
     }
-    if scene
-        .pair
-        .first()
-        .and_then(|p| p.potential)
-        .is_some_and(|p| p.is_rigid())
+    if let Some(p) = scene.pair.first().and_then(|p| p.potential)
+        && p.is_rigid()
+        && let Some((r_switch, r_cut)) = p.describe().own_window()
         && scene.smd.as_ref().is_some_and(|s| s.smoothing.is_some())
     {
         return refuse(
             "smd.smoothing",
-            "SSD/E switches itself off between 7.65 and 9 Å and is integrated as it is, not \
-             smoothed again; remove the key",
+            &format!(
+                "`{}` switches itself off between {r_switch} and {r_cut} (length) and is \
+                 integrated as it is, not smoothed again; remove the key",
+                p.kind()
+            ),
         );
     }
     if scene.pair.is_empty() {

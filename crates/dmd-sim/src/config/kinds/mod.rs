@@ -13,6 +13,7 @@
 //! variant and its arm in `describe`), its module here, and its arm in
 //! [`PotentialSpec::visit`].
 
+mod biaxial_gay_berne;
 mod gay_berne;
 mod lennard_jones;
 mod lj_rods;
@@ -39,6 +40,7 @@ impl PotentialSpec {
             PotentialSpec::GayBerne(k) => v.visit(k),
             PotentialSpec::SsdE(k) => v.visit(k),
             PotentialSpec::Stockmayer(k) => v.visit(k),
+            PotentialSpec::BiaxialGayBerne(k) => v.visit(k),
         }
     }
 }
