@@ -130,9 +130,10 @@ pub fn check(scene: &Scene) -> Result<(), SceneError> {
         return refuse(
             "smd.smoothing",
             &format!(
-                "`{}` switches itself off between {r_switch} and {r_cut} (length) and is \
+                "`{}` switches itself off between {r_switch} and {r_cut} {} and is \
                  integrated as it is, not smoothed again; remove the key",
-                p.kind()
+                p.kind(),
+                crate::config::units::UnitNames::of(scene.units).length
             ),
         );
     }

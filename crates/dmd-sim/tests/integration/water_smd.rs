@@ -182,7 +182,7 @@ fn water_refuses_a_smoothing_window_with_the_reason() {
     let e = smd_engine::run(&water(&["smd.smoothing.r_l=7.0"]), Path::new("."), None).unwrap_err();
     let msg = e.to_string();
     assert!(
-        msg.contains("smd.smoothing") && msg.contains("SSD/E"),
+        msg.contains("smd.smoothing") && msg.contains("`ssd-e`") && msg.contains("9 Å"),
         "{msg}"
     );
 }
