@@ -13,9 +13,17 @@
 //! (`_error` of the summary) in quadrature. A setting qualifies when `error + uncertainty` is
 //! within the target. The recommended value of each knob is its cheapest qualifying one, by CPU
 //! seconds of production per unit of simulated time; a quantity too noisy at this probe length
-//! to be shown within the target is named as not certified and left out of the judgement. Knobs are judged one at a time; whether
-//! their recommended values together meet the target is what `cargo xtask validate --only
-//! tune` checks on the shipped scenes.
+//! to be shown within the target is named as not certified and left out of the judgement.
+//!
+//! After this first pass, the probes whose noise alone keeps a knob from certifying U/N and P
+//! are lengthened ([`lengthening`]: the knob's cheapest coarser probe that is within the
+//! target or could be, with its reference), in up to [`MAX_ROUNDS`] rounds, while the
+//! estimate of their wall time fits in the budget ([`TuneOptions::wall_budget`], default
+//! [`WALL_BUDGET`]). A lengthening is an independent run (its own seed and equilibration) of
+//! the missing production, pooled with the probe's runs ([`Probe::pooled`]); the knobs are
+//! then judged on the pooled probes. Knobs are judged one at a time; whether their
+//! recommended values together meet the target is what `cargo xtask validate --only tune`
+//! checks on the shipped scenes.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -2008,5 +2016,50 @@ mod tests {
             Some("run.events=500000")
         );
         assert_eq!(Production::Scene.times(2.0), None);
+    }
+
+    #[test]
+    fn an_uncertified_quantity_is_named_with_why_noise_or_a_real_difference() {
+        let step = Knob {
+            key: "pair.0.terraces.step".to_owned(),
+            linked: Vec::new(),
+            label: "ΔV of pair 0".to_owned(),
+            unit: "ε".to_owned(),
+            value: 0.5,
+            choices: Vec::new(),
+        };
+        // P 0.5 ± 1.5 % at the two coarse probes: noise (the difference could be within 1 %).
+        let noisy = p_rows([0.005, 0.005, 0.005], [0.015, 0.015, 0.015]);
+        // P 5.8 ± 1.2 %: off at two standard errors, whatever the length.
+        let off = p_rows([0.10, 0.07, 0.058], [0.012, 0.012, 0.012]);
+        for (rows, noise) in [(noisy, true), (off, false)] {
+            let refs: Vec<&Row> = rows.iter().collect();
+            // U/N alone is judged: the cheapest probe is recommended in U/N.
+            let (r, which) = decide(&refs, 0.01).unwrap();
+            assert_eq!((r, which), (0, [true, false]));
+            let t = Tuning {
+                knobs: vec![step.clone()],
+                rows,
+                target: 0.01,
+                budget: 0.01,
+                recommended: vec![Some(r)],
+                certified: vec![which],
+                units: UnitNames::of(crate::config::scene::UnitSystem::Reduced),
+                length: String::new(),
+                smooth: true,
+                wall_budget: WALL_BUDGET,
+                wall_seconds: 0.0,
+                lengthened: Vec::new(),
+            };
+            let text = t.recommendation();
+            assert!(text.contains("P is not certified"), "{text}");
+            assert_eq!(text.contains("times longer would tell"), noise, "{text}");
+            assert_eq!(
+                text.contains("longer probes would not qualify one"),
+                !noise,
+                "{text}"
+            );
+            assert!(text.contains("--set pair.0.terraces.step=0"), "{text}");
+        }
     }
 }
