@@ -133,7 +133,7 @@ enum Command {
         /// Wall-clock budget of the whole tune: seconds (540, 540s), minutes (9m) or hours
         /// (1h); default 9m. The first pass of probes always runs; probes whose noise keeps a
         /// knob from certifying U/N and P are then lengthened while the estimate fits.
-        #[arg(long, value_parser = dmd_sim::tune::parse_wall)]
+        #[arg(long, allow_hyphen_values = true, value_parser = dmd_sim::tune::parse_wall)]
         budget: Option<f64>,
     },
     /// Read and check a scene (with its overrides) without running it, and say how many bodies
