@@ -130,6 +130,11 @@ enum Command {
         /// Or: production events of each probe.
         #[arg(long, conflicts_with = "time")]
         events: Option<f64>,
+        /// Wall-clock budget of the whole tune: seconds (540, 540s), minutes (9m) or hours
+        /// (1h); default 9m. The first pass of probes always runs; probes whose noise keeps a
+        /// knob from certifying U/N and P are then lengthened while the estimate fits.
+        #[arg(long, allow_hyphen_values = true, value_parser = dmd_sim::tune::parse_wall)]
+        budget: Option<f64>,
     },
     /// Read and check a scene (with its overrides) without running it, and say how many bodies
     /// it has.
@@ -1027,9 +1032,17 @@ fn main() -> ExitCode {
             engine,
             time,
             events,
+            budget,
         } => {
             set.extend(engine.map(|e| format!("engine={e}")));
-            tune(&scene, &out, set, target, time, events)
+            let options = dmd_sim::tune::TuneOptions {
+                target,
+                overrides: set,
+                time,
+                events,
+                wall_budget: budget,
+            };
+            tune(&scene, &out, &options)
         }
         Command::Resume {
             checkpoint,
@@ -1048,21 +1061,13 @@ fn main() -> ExitCode {
 }
 
 /// `dmd tune`: the probes with a progress line on stderr, the table, the recommendation.
-fn tune(
-    scene: &Path,
-    out: &Path,
-    overrides: Vec<String>,
-    target: f64,
-    time: Option<f64>,
-    events: Option<f64>,
-) -> ExitCode {
+fn tune(scene: &Path, out: &Path, options: &dmd_sim::tune::TuneOptions) -> ExitCode {
     use dmd_sim::tune;
-    let options = tune::TuneOptions {
-        target,
-        overrides,
-        time,
-        events,
-    };
+    eprintln!(
+        "dmd tune: wall-clock budget {} (the first pass of probes always runs whole; then \
+         probes are lengthened while they fit)",
+        duration(options.wall_budget.unwrap_or(tune::WALL_BUDGET))
+    );
     let started = std::time::Instant::now();
     let mut progress = |done: usize, total: usize, what: &str| {
         eprintln!(
@@ -1070,7 +1075,7 @@ fn tune(
             duration(started.elapsed().as_secs_f64())
         );
     };
-    let result = tune::tune(scene, &options, &mut progress).and_then(|t| {
+    let result = tune::tune(scene, options, &mut progress).and_then(|t| {
         let files = t.write(out)?;
         Ok((t, files))
     });

@@ -13,9 +13,17 @@
 //! (`_error` of the summary) in quadrature. A setting qualifies when `error + uncertainty` is
 //! within the target. The recommended value of each knob is its cheapest qualifying one, by CPU
 //! seconds of production per unit of simulated time; a quantity too noisy at this probe length
-//! to be shown within the target is named as not certified and left out of the judgement. Knobs are judged one at a time; whether
-//! their recommended values together meet the target is what `cargo xtask validate --only
-//! tune` checks on the shipped scenes.
+//! to be shown within the target is named as not certified and left out of the judgement.
+//!
+//! After this first pass, the probes whose noise alone keeps a knob from certifying U/N and P
+//! are lengthened ([`lengthening`]: the knob's cheapest coarser probe that is within the
+//! target or could be, with its reference), in up to [`MAX_ROUNDS`] rounds, while the
+//! estimate of their wall time fits in the budget ([`TuneOptions::wall_budget`], default
+//! [`WALL_BUDGET`]). A lengthening is an independent run (its own seed and equilibration) of
+//! the missing production, pooled with the probe's runs ([`Probe::pooled`]); the knobs are
+//! then judged on the pooled probes. Knobs are judged one at a time; whether their
+//! recommended values together meet the target is what `cargo xtask validate --only tune`
+//! checks on the shipped scenes.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -36,6 +44,16 @@ pub const PRODUCTION_FRACTION: f64 = 0.5;
 
 /// Default probe equilibration length, as a fraction of the scene's.
 pub const EQUILIBRATION_FRACTION: f64 = 0.5;
+
+/// Default wall-clock budget of a tune (seconds): the first pass always runs whole; probes
+/// are lengthened only while their estimated wall time fits in what is left of it.
+pub const WALL_BUDGET: f64 = 540.0;
+
+/// The most a probe's production is lengthened by in one round of lengthening.
+pub const MAX_LENGTHENING: f64 = 16.0;
+
+/// Rounds of lengthening after the first pass at most.
+pub const MAX_ROUNDS: usize = 3;
 
 /// Why `dmd tune` cannot run.
 #[derive(Debug, thiserror::Error)]
@@ -95,6 +113,31 @@ pub struct TuneOptions {
     pub time: Option<f64>,
     /// Or: probe production events.
     pub events: Option<f64>,
+    /// Wall-clock seconds the whole tune may take ([`WALL_BUDGET`] if none): the first pass
+    /// runs whole, and its probes are lengthened while the estimate of what that takes fits
+    /// in what is left.
+    pub wall_budget: Option<f64>,
+}
+
+/// A wall-clock duration given as seconds (`540`, `540s`), minutes (`9m`) or hours (`1h`).
+///
+/// # Errors
+/// What is wrong with `text`.
+pub fn parse_wall(text: &str) -> Result<f64, String> {
+    let t = text.trim();
+    let (number, unit) = match t.char_indices().last() {
+        Some((k, 's')) => (&t[..k], 1.0),
+        Some((k, 'm')) => (&t[..k], 60.0),
+        Some((k, 'h')) => (&t[..k], 3600.0),
+        _ => (t, 1.0),
+    };
+    match number.trim().parse::<f64>() {
+        Ok(x) if x.is_finite() && x >= 0.0 => Ok(x * unit),
+        _ => Err(format!(
+            "`{text}` is not a wall-clock time: give seconds (540, 540s), minutes (9m) or \
+             hours (1h)"
+        )),
+    }
 }
 
 /// One accuracy knob of a scene.
@@ -212,6 +255,40 @@ pub struct Probe {
     pub diffusion: Option<Measured>,
     /// CPU seconds of production per unit of simulated time.
     pub cost: f64,
+    /// Simulated time of production (time unit), over all its runs.
+    pub length: f64,
+    /// Wall-clock seconds of production, over all its runs.
+    pub wall: f64,
+    /// Independent runs pooled into it (1, and one more for each lengthening).
+    pub runs: usize,
+}
+
+impl Probe {
+    /// This probe pooled with an independent run of the same setting (`other`): every mean
+    /// weighted by its run's simulated time, as one run of both lengths would weigh its
+    /// samples; standard errors combined as those of independent means,
+    /// `√(Σ wᵢ² σᵢ²) / Σ wᵢ`; cost as total CPU over total simulated time.
+    pub fn pooled(&self, other: &Probe) -> Probe {
+        let (a, b) = (self.length, other.length);
+        let w = a + b;
+        let mean = |x: Measured, y: Measured| Measured {
+            value: (a * x.value + b * y.value) / w,
+            error: (a * x.error).hypot(b * y.error) / w,
+        };
+        Probe {
+            energy: mean(self.energy, other.energy),
+            pressure: mean(self.pressure, other.pressure),
+            pressure_ideal: (a * self.pressure_ideal + b * other.pressure_ideal) / w,
+            diffusion: match (self.diffusion, other.diffusion) {
+                (Some(x), Some(y)) => Some(mean(x, y)),
+                _ => None,
+            },
+            cost: (a * self.cost + b * other.cost) / w,
+            length: w,
+            wall: self.wall + other.wall,
+            runs: self.runs + other.runs,
+        }
+    }
 }
 
 /// The error of a probe against its knob's reference.
@@ -309,6 +386,13 @@ pub struct Tuning {
     /// run, `potential_energy_per_body_smooth`, `pressure_smooth`) rather than the terraced
     /// potential's own.
     pub smooth: bool,
+    /// The wall-clock budget (s).
+    pub wall_budget: f64,
+    /// The wall-clock seconds the tune took.
+    pub wall_seconds: f64,
+    /// Each lengthening of a probe, for people (`round 2: pair.0.terraces.step_kt=0.25:
+    /// 10 → 43 ps`).
+    pub lengthened: Vec<String>,
 }
 
 /// The cheapest row (by [`Row::cost`]) among `rows` whose bound is within `budget`; among
@@ -533,9 +617,10 @@ fn probe_overrides(
     given: &dyn Fn(&str) -> bool,
     scene: &Scene,
     options: &TuneOptions,
-) -> (Vec<String>, String) {
+) -> (Vec<String>, String, Production) {
     let names = UnitNames::of(scene.units);
     let mut sets = Vec::new();
+    let mut unit = Production::Scene;
     let production = match (
         options.time,
         options.events,
@@ -547,6 +632,7 @@ fn probe_overrides(
                 sets.push("run.events=".to_owned());
             }
             sets.push(format!("run.time={t}"));
+            unit = Production::Time(t);
             format!("{t} {}", names.time)
         }
         (None, Some(n), _, _) => {
@@ -554,16 +640,19 @@ fn probe_overrides(
                 sets.push("run.time=".to_owned());
             }
             sets.push(format!("run.events={}", n.round()));
+            unit = Production::Events(n.round());
             format!("{n:.3e} events")
         }
         (None, None, Some(t), _) => {
             let t = t * PRODUCTION_FRACTION;
             sets.push(format!("run.time={t}"));
+            unit = Production::Time(t);
             format!("{t} {}", names.time)
         }
         (None, None, None, Some(n)) => {
             let n = (n as f64 * PRODUCTION_FRACTION).round();
             sets.push(format!("run.events={n}"));
+            unit = Production::Events(n);
             format!("{n:.3e} events")
         }
         (None, None, None, None) => "the scene's length".to_owned(),
@@ -589,8 +678,35 @@ fn probe_overrides(
     }
     (
         sets,
-        format!("probes of {production} of production after {equilibration} of equilibration"),
+        format!(
+            "probes of {production} of production (first pass) after {equilibration} of \
+             equilibration"
+        ),
+        unit,
     )
+}
+
+/// How a probe's production length is given: the production run of a lengthening is given
+/// the same way.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Production {
+    /// `run.time`, in the scene's time unit.
+    Time(f64),
+    /// `run.events`.
+    Events(f64),
+    /// The scene's own length, which the tune does not know how to scale.
+    Scene,
+}
+
+impl Production {
+    /// The `--set` line of a production `factor` times this one; `None` for the scene's.
+    fn times(self, factor: f64) -> Option<String> {
+        match self {
+            Production::Time(t) => Some(format!("run.time={}", t * factor)),
+            Production::Events(n) => Some(format!("run.events={}", (n * factor).round())),
+            Production::Scene => None,
+        }
+    }
 }
 
 /// The `--set` lines that keep the scene's Andersen thermostat on in production
@@ -635,6 +751,9 @@ fn probe(text: &str, base: &Path, overrides: &[String], smooth: bool) -> Result<
             pressure_ideal: ideal,
             diffusion: s.diffusion_msd.map(|d| m(d, s.diffusion_msd_error)),
             cost: s.cpu_seconds / s.sim_time,
+            length: s.sim_time,
+            wall: s.wall_seconds,
+            runs: 1,
         });
     }
     let s = run_scene(&scene, base, None, &mut Quiet)?;
@@ -669,20 +788,21 @@ fn probe(text: &str, base: &Path, overrides: &[String], smooth: bool) -> Result<
         pressure_ideal: s.pressure_ideal,
         diffusion: s.diffusion_msd.map(|d| m(d, s.diffusion_msd_error)),
         cost: s.cpu_seconds / s.sim_time,
+        length: s.sim_time,
+        wall: s.wall_seconds,
+        runs: 1,
     })
 }
 
-/// Fills in the deviations of the rows of knob `knob` (its last row is the reference) and
-/// returns its recommended row with the observables (U/N, P) that the recommendation
-/// certifies within the budget: the cheapest row within it in every certifiable observable
-/// ([`certifiable`]); the reference, certifying nothing, when no observable is certifiable or
-/// no coarser row qualifies.
-fn judge(rows: &mut [Row], budget: f64) -> Option<(usize, [bool; 2])> {
+/// Fills in the deviations of the rows of one knob (its last row is the reference) from
+/// the reference.
+fn deviations(rows: &mut [Row]) {
     let Some(Ok(reference)) = rows.last().map(|r| r.probe.clone()) else {
-        return None;
+        return;
     };
     let n = rows.len();
     for (k, row) in rows.iter_mut().enumerate() {
+        row.deviations = None;
         if let Ok(p) = &row.probe {
             let is_ref = k + 1 == n;
             let u_scale = reference.energy.value.abs();
@@ -697,12 +817,75 @@ fn judge(rows: &mut [Row], budget: f64) -> Option<(usize, [bool; 2])> {
             ]);
         }
     }
-    let refs: Vec<&Row> = rows.iter().collect();
-    let which = certifiable(&refs, budget);
-    match cheapest_within_of(&refs, budget, which) {
+}
+
+/// The recommended row of one knob's judged rows (the reference last) with the observables
+/// (U/N, P) it certifies within the budget: the cheapest row within it in every certifiable
+/// observable ([`certifiable`]); the reference, certifying nothing, when no observable is
+/// certifiable or no coarser row qualifies. `None` when the reference gave no value.
+fn decide(rows: &[&Row], budget: f64) -> Option<(usize, [bool; 2])> {
+    let n = rows.len();
+    if !matches!(rows.last().map(|r| &r.probe), Some(Ok(_))) {
+        return None;
+    }
+    let which = certifiable(rows, budget);
+    match cheapest_within_of(rows, budget, which) {
         Some(r) if r + 1 < n => Some((r, which)),
         _ => Some((n - 1, [false, false])),
     }
+}
+
+/// Fills in the deviations of the rows of one knob (its last row is the reference) and
+/// returns its recommendation ([`decide`]).
+fn judge(rows: &mut [Row], budget: f64) -> Option<(usize, [bool; 2])> {
+    deviations(rows);
+    let refs: Vec<&Row> = rows.iter().collect();
+    decide(&refs, budget)
+}
+
+/// Which probe of one knob's judged rows (the reference last) to lengthen, together with the
+/// reference, so that the knob may certify U/N and P both, and by what factor of their
+/// production; `None` when the knob certifies both already or no lengthening can help.
+///
+/// A candidate is a coarser row, cheaper than the reference, that is within the budget in
+/// each observable or could be: its difference minus twice its standard error is within
+/// it (the difference may be noise), and its standard error is more than half the budget
+/// (more length shrinks it). The cheapest candidate is lengthened; the factor aims the
+/// standard error of its difference at `max(0.8 (budget − difference), budget / 2)`
+/// (errors shrink as the square root of the length), at most [`MAX_LENGTHENING`]. Whether
+/// it then qualifies is measured, not assumed: a difference that was noise shrinks, one
+/// that is real stays.
+pub fn lengthening(rows: &[&Row], budget: f64) -> Option<(usize, f64)> {
+    let n = rows.len();
+    let (_, certified) = decide(rows, budget)?;
+    if certified == [true, true] {
+        return None;
+    }
+    let reference_cost = rows[n - 1].cost();
+    let mut best: Option<(usize, f64)> = None;
+    for (k, r) in rows[..n - 1].iter().enumerate() {
+        let Some(d) = r.deviations.filter(|_| r.cost() < reference_cost) else {
+            continue;
+        };
+        let mut factor: f64 = 1.0;
+        let mut possible = true;
+        for d in d {
+            if d.bound() <= budget {
+                continue;
+            }
+            let (e, u) = (d.error, d.uncertainty);
+            if !(u.is_finite() && u > 0.5 * budget && e - 2.0 * u < budget) {
+                possible = false;
+                break;
+            }
+            let aim = (0.8 * (budget - e)).max(0.5 * budget);
+            factor = factor.max((u / aim).powi(2));
+        }
+        if possible && factor > 1.0 && best.is_none_or(|(b, _)| r.cost() < rows[b].cost()) {
+            best = Some((k, factor.min(MAX_LENGTHENING)));
+        }
+    }
+    best
 }
 
 /// Tunes the scene at `path`: runs the probes (reporting each through `progress` as
@@ -734,6 +917,15 @@ pub fn tune(
             });
         }
     }
+    if let Some(b) = options.wall_budget
+        && !(b.is_finite() && b >= 0.0)
+    {
+        return Err(TuneError::Option {
+            option: "--budget",
+            problem: format!("{b} s is not a wall-clock budget: give a duration such as 9m"),
+        });
+    }
+    let started = std::time::Instant::now();
     let (scene, base) = Scene::load(path, &options.overrides)?;
     if scene.chains.is_some() || scene.sweep.is_some() || scene.hmc.is_some() {
         return Err(TuneError::NoKnob(
@@ -762,7 +954,7 @@ pub fn tune(
     ];
     let present = Scene::given_keys(&text, &options.overrides, &ASKED)?;
     let given = |key: &str| ASKED.iter().zip(&present).any(|(k, &p)| p && *k == key);
-    let (mut shorten, mut length) = probe_overrides(&given, &scene, options);
+    let (mut shorten, mut length, production) = probe_overrides(&given, &scene, options);
     let canonical = canonical_sets(&scene);
     if !canonical.is_empty() {
         shorten.extend(canonical.iter().cloned());
@@ -788,7 +980,6 @@ pub fn tune(
     }
     // The scene's own setting is the same probe for every numeric knob, and a rule knob's
     // reference is its ΔV knob's: each distinct probe runs once.
-    let mut done: Vec<(Vec<String>, Result<Probe, String>)> = Vec::new();
     let is_scene = |k: usize, value: f64| {
         let knob: &Knob = &knobs[k];
         knob.choices.is_empty() && (value - knob.value).abs() <= 1e-12 * knob.value.abs()
@@ -800,57 +991,179 @@ pub fn tune(
             sets.to_vec()
         }
     };
-    let mut distinct: Vec<Vec<String>> = Vec::new();
+    let mut distinct: Vec<Distinct> = Vec::new();
+    // For each row, its distinct probe.
+    let mut of_row = Vec::new();
     for (k, value, sets) in &plan {
         let key = key_of(*k, *value, sets);
-        if !distinct.contains(&key) {
-            distinct.push(key);
-        }
-    }
-    let total = distinct.len();
-    let mut rows = Vec::new();
-    for (k, value, sets) in plan {
-        let knob = &knobs[k];
-        let key = key_of(k, value, &sets);
-        let shared = done.iter().find(|(s, _)| *s == key).map(|(_, p)| p.clone());
-        let result = match shared {
-            Some(p) => p,
+        let d = match distinct.iter().position(|d| d.key == key) {
+            Some(d) => d,
             None => {
-                let what = format!("{} = {}", knob.key, knob.show(value));
-                progress(done.len(), total, &what);
-                let r = probe(&text, &base, &sets, smooth);
-                let is_ref = knob.values().last() == Some(&value);
-                let r = match r {
-                    Err(e) if is_ref => {
-                        return Err(TuneError::Reference {
-                            setting: what,
-                            source: e,
-                        });
-                    }
-                    r => r.map_err(|e| e.to_string()),
-                };
-                done.push((key, r.clone()));
-                r
+                distinct.push(Distinct {
+                    key,
+                    sets: sets.clone(),
+                    what: format!("{} = {}", knobs[*k].key, knobs[*k].show(*value)),
+                    is_reference: false,
+                    result: Err(String::new()),
+                    equilibration_wall: 0.0,
+                    first_length: f64::NAN,
+                });
+                distinct.len() - 1
             }
         };
-        rows.push(Row {
-            knob: k,
-            value,
-            probe: result,
+        distinct[d].is_reference |= knobs[*k].values().last() == Some(value);
+        of_row.push(d);
+    }
+    let mut total = distinct.len();
+    let mut done = 0;
+    for d in &mut distinct {
+        progress(done, total, &d.what);
+        let started = std::time::Instant::now();
+        let r = probe(&text, &base, &d.sets, smooth);
+        let wall = started.elapsed().as_secs_f64();
+        d.result = match r {
+            Err(e) if d.is_reference => {
+                return Err(TuneError::Reference {
+                    setting: d.what.clone(),
+                    source: e,
+                });
+            }
+            r => r.map_err(|e| e.to_string()),
+        };
+        if let Ok(p) = &d.result {
+            d.equilibration_wall = (wall - p.wall).max(0.0);
+            d.first_length = p.length;
+        }
+        done += 1;
+    }
+    let mut rows: Vec<Row> = plan
+        .iter()
+        .zip(&of_row)
+        .map(|((k, value, _), &d)| Row {
+            knob: *k,
+            value: *value,
+            probe: distinct[d].result.clone(),
             deviations: None,
-        });
+        })
+        .collect();
+    let budget = options.target;
+    let spans = |rows: &[Row]| -> Vec<std::ops::Range<usize>> {
+        (0..knobs.len())
+            .map(|k| {
+                let a = rows.iter().position(|r| r.knob == k).unwrap_or(0);
+                let n = rows[a..].iter().take_while(|r| r.knob == k).count();
+                a..a + n
+            })
+            .collect()
+    };
+    let spans = spans(&rows);
+    for span in &spans {
+        deviations(&mut rows[span.clone()]);
+    }
+    // Rounds of lengthening: the probes whose noise keeps a knob from certifying U/N and P,
+    // each pooled with an independent run of the missing length (its own seed and
+    // equilibration), while the estimate of its wall time fits in the budget.
+    let wall_budget = options.wall_budget.unwrap_or(WALL_BUDGET);
+    let mut lengthened = Vec::new();
+    for round in 2..=MAX_ROUNDS + 1 {
+        // (distinct probe, factor of its production) wanted, knob by knob.
+        let mut wanted: Vec<(usize, f64)> = Vec::new();
+        for span in &spans {
+            let refs: Vec<&Row> = rows[span.clone()].iter().collect();
+            if let Some((r, factor)) = lengthening(&refs, budget) {
+                let ds = [of_row[span.start + r], of_row[span.end - 1]];
+                // The two probes at their longest wanted factor, or a smaller one that the
+                // budget allows (not below 1.5: the error bar would shrink by less than a
+                // fifth).
+                let mut factor = factor;
+                while factor >= 1.5 {
+                    let mut plan = wanted.clone();
+                    for d in ds {
+                        match plan.iter_mut().find(|(w, _)| *w == d) {
+                            Some((_, f)) => *f = f.max(factor),
+                            None => plan.push((d, factor)),
+                        }
+                    }
+                    let estimate: f64 = plan.iter().map(|&(d, f)| distinct[d].estimate(f)).sum();
+                    if started.elapsed().as_secs_f64() + estimate <= wall_budget {
+                        wanted = plan;
+                        break;
+                    }
+                    factor = 1.0 + 0.7 * (factor - 1.0);
+                }
+            }
+        }
+        if wanted.is_empty() {
+            break;
+        }
+        total += wanted.len();
+        for (d, factor) in wanted {
+            let probe_d = &distinct[d];
+            let Ok(before) = probe_d.result.clone() else {
+                continue;
+            };
+            // The missing production, in the unit the probe was given in; its simulated
+            // time may differ from the plan's when it is counted in events.
+            let Some(extra) =
+                production.times((factor - 1.0) * before.length / probe_d.first_length)
+            else {
+                done += 1;
+                continue;
+            };
+            let what = format!(
+                "round {round}: {}, ×{factor:.1} the production ({} in all)",
+                probe_d.what,
+                before.runs + 1
+            );
+            progress(done, total, &what);
+            let mut sets = probe_d.sets.clone();
+            sets.push(extra);
+            // An independent run: the scene's seed moved by a large odd stride per run.
+            sets.push(format!(
+                "seed={}",
+                scene
+                    .seed
+                    .wrapping_add(1_000_003u64.wrapping_mul(before.runs as u64))
+            ));
+            let started_run = std::time::Instant::now();
+            let r = probe(&text, &base, &sets, smooth);
+            let wall = started_run.elapsed().as_secs_f64();
+            let d_mut = &mut distinct[d];
+            match r {
+                Ok(more) => {
+                    d_mut.equilibration_wall = (wall - more.wall).max(0.0);
+                    let pooled = before.pooled(&more);
+                    lengthened.push(format!(
+                        "round {round}: {}: {} → {} {} of production ({} runs)",
+                        d_mut.what,
+                        short(before.length),
+                        short(pooled.length),
+                        UnitNames::of(scene.units).time,
+                        pooled.runs
+                    ));
+                    d_mut.result = Ok(pooled);
+                }
+                Err(e) => lengthened.push(format!(
+                    "round {round}: {}: the lengthening run failed ({e}); its first runs are kept",
+                    d_mut.what
+                )),
+            }
+            done += 1;
+        }
+        for (row, &d) in rows.iter_mut().zip(&of_row) {
+            row.probe = distinct[d].result.clone();
+        }
+        for span in &spans {
+            deviations(&mut rows[span.clone()]);
+        }
     }
     progress(total, total, "done");
-    let budget = options.target;
     let mut recommended = Vec::new();
     let mut certified = Vec::new();
-    let mut first = 0;
-    for k in 0..knobs.len() {
-        let n = rows[first..].iter().take_while(|r| r.knob == k).count();
-        let judged = judge(&mut rows[first..first + n], budget);
-        recommended.push(judged.map(|(r, _)| first + r));
+    for span in &spans {
+        let judged = judge(&mut rows[span.clone()], budget);
+        recommended.push(judged.map(|(r, _)| span.start + r));
         certified.push(judged.map_or([false, false], |(_, c)| c));
-        first += n;
     }
     Ok(Tuning {
         knobs,
@@ -862,7 +1175,41 @@ pub fn tune(
         units: UnitNames::of(scene.units),
         length,
         smooth,
+        wall_budget,
+        wall_seconds: started.elapsed().as_secs_f64(),
+        lengthened,
     })
+}
+
+/// One distinct probe of a tune (the scene's own setting is shared by its numeric knobs, a
+/// rule knob's reference is its ΔV knob's).
+struct Distinct {
+    /// What identifies it (empty for the scene's own setting).
+    key: Vec<String>,
+    /// Its `--set` lines.
+    sets: Vec<String>,
+    /// For the progress line.
+    what: String,
+    /// Whether it is a knob's reference (whose failure stops the tune).
+    is_reference: bool,
+    /// Its measurement, pooled over its runs.
+    result: Result<Probe, String>,
+    /// Wall-clock seconds of its last run's equilibration and set-up.
+    equilibration_wall: f64,
+    /// Simulated production time of its first run (the unit of its `--set` length).
+    first_length: f64,
+}
+
+impl Distinct {
+    /// Estimated wall-clock seconds of lengthening it to `factor` times its production: one
+    /// more run of the missing production after its own equilibration, at the wall time per
+    /// simulated time its runs took.
+    fn estimate(&self, factor: f64) -> f64 {
+        match &self.result {
+            Ok(p) if p.length > 0.0 => self.equilibration_wall + (factor - 1.0).max(0.0) * p.wall,
+            _ => f64::INFINITY,
+        }
+    }
 }
 
 /// How many times longer the probes of `row` and its reference would have to be for its
@@ -918,7 +1265,7 @@ impl Tuning {
         let mut out = String::new();
         let _ = writeln!(
             out,
-            "{:<34} {:>20} {:>18} {:>16} {:>16} {:>18} {:>14}  within",
+            "{:<34} {:>20} {:>18} {:>16} {:>16} {:>18} {:>14} {:>12}  within",
             "setting",
             format!(
                 "U/N{} ({})",
@@ -934,6 +1281,7 @@ impl Tuning {
             "err P (%)",
             format!("D ({})", u.diffusion),
             format!("CPU s/{}", u.time),
+            format!("prod ({})", u.time),
         );
         for (k, row) in self.rows.iter().enumerate() {
             let knob = &self.knobs[row.knob];
@@ -957,13 +1305,18 @@ impl Tuning {
                     };
                     let _ = writeln!(
                         out,
-                        "{setting:<34} {:>20} {:>18} {:>16} {:>16} {:>18} {:>14.4}  {mark}",
+                        "{setting:<34} {:>20} {:>18} {:>16} {:>16} {:>18} {:>14.4} {:>12}  {mark}",
                         pm(p.energy),
                         pm(p.pressure),
                         percent(d[0]),
                         percent(d[1]),
                         p.diffusion.map_or("-".to_owned(), pm),
                         p.cost,
+                        if p.runs > 1 {
+                            format!("{} ({} runs)", short(p.length), p.runs)
+                        } else {
+                            short(p.length)
+                        },
                     );
                 }
                 Err(e) => {
@@ -987,6 +1340,27 @@ impl Tuning {
                  run)"
             } else {
                 ""
+            }
+        );
+        let _ = writeln!(
+            out,
+            "The tune took {:.0} s of wall time against a budget of {:.0} s; {}",
+            self.wall_seconds,
+            self.wall_budget,
+            if self.lengthened.is_empty() {
+                "no probe was lengthened (none whose noise alone kept a knob from certifying \
+                 U/N and P, or none that fitted in the budget)."
+                    .to_owned()
+            } else {
+                format!(
+                    "lengthened, each pooled with independent runs, where noise kept a knob \
+                     from certifying U/N and P:\n{}",
+                    self.lengthened
+                        .iter()
+                        .map(|l| format!("#   {l}"))
+                        .collect::<Vec<_>>()
+                        .join("\n")
+                )
             }
         );
         for (k, knob) in self.knobs.iter().enumerate() {
@@ -1020,7 +1394,8 @@ impl Tuning {
                         match longer(next, self.budget) {
                             Some(f) => format!(
                                 " Its difference is within the target but not its error bar: \
-                                 probes about {f:.0} times longer would tell."
+                                 probes about {f:.0} times longer would tell (a larger \
+                                 --budget, or --time)."
                             ),
                             None => String::new(),
                         }
@@ -1041,18 +1416,43 @@ impl Tuning {
                         if which[q] {
                             continue;
                         }
-                        let u = best_uncertainty(&self.rows[first..=finest], q);
-                        let _ = writeln!(
-                            out,
-                            "# {}: {name} is not certified: the standard error of its difference \
-                             from the finest probe is at best {:.2} % at this probe length, above \
-                             the target, so no setting can be shown within it (probes about {:.0} \
-                             times longer would tell); the recommendation rests on {} alone.",
-                            knob.label,
-                            100.0 * u,
-                            (u / self.budget).powi(2).ceil().max(2.0),
-                            ["U/N", "P"][1 - q]
-                        );
+                        let rows = &self.rows[first..=finest];
+                        let u = best_uncertainty(rows, q);
+                        let other = ["U/N", "P"][1 - q];
+                        // The smallest the difference of a coarser probe could be, at two
+                        // standard errors.
+                        let reach = rows[..rows.len() - 1]
+                            .iter()
+                            .filter_map(|r| {
+                                r.deviations.map(|d| d[q].error - 2.0 * d[q].uncertainty)
+                            })
+                            .filter(|x| x.is_finite())
+                            .fold(f64::INFINITY, f64::min);
+                        if u > self.budget && reach < self.budget {
+                            let _ = writeln!(
+                                out,
+                                "# {}: {name} is not certified: the standard error of its \
+                                 difference from the finest probe is at best {:.2} % at this \
+                                 probe length, above the target, so no setting can be shown \
+                                 within it (probes about {:.0} times longer would tell: a larger \
+                                 --budget, or --time); the recommendation rests on {other} alone.",
+                                knob.label,
+                                100.0 * u,
+                                (u / self.budget).powi(2).ceil().max(2.0),
+                            );
+                        } else {
+                            let _ = writeln!(
+                                out,
+                                "# {}: {name} is not certified: every coarser probe differs from \
+                                 the finest by more than the target (at two standard errors, by \
+                                 {:.2} % at least), so longer probes would not qualify one; a \
+                                 finer setting than the tune probes (tune again from a finer \
+                                 scene value) would be needed for {name} within the target. The \
+                                 recommendation rests on {other} alone.",
+                                knob.label,
+                                100.0 * reach.max(0.0),
+                            );
+                        }
                     }
                     let sets = knob.recommend(row.value);
                     if sets.is_empty() {
@@ -1143,8 +1543,8 @@ impl Tuning {
         let u = self.units;
         let mut csv = format!(
             "key,value,U_per_body{x} ({e}),U_per_body{x}_error ({e}),P{x} ({p}),P{x}_error ({p}),\
-             D ({d}),D_error ({d}),cpu_seconds_per_{t} (s/{t}),U_rel_error,U_rel_uncertainty,\
-             P_rel_error,P_rel_uncertainty,bound,within_target,recommended\n",
+             D ({d}),D_error ({d}),cpu_seconds_per_{t} (s/{t}),production ({t}),runs,U_rel_error,\
+             U_rel_uncertainty,P_rel_error,P_rel_uncertainty,bound,within_target,recommended\n",
             x = if self.smooth { "_smooth" } else { "" },
             e = u.energy,
             p = u.pressure,
@@ -1166,6 +1566,9 @@ impl Tuning {
                         pressure_ideal: f64::NAN,
                         diffusion: None,
                         cost: f64::NAN,
+                        length: f64::NAN,
+                        wall: f64::NAN,
+                        runs: 0,
                     },
                     [Deviation {
                         error: f64::NAN,
@@ -1182,6 +1585,8 @@ impl Tuning {
                 diff.value,
                 diff.error,
                 p.cost,
+                p.length,
+                p.runs as f64,
                 d[0].error,
                 d[0].uncertainty,
                 d[1].error,
@@ -1278,6 +1683,9 @@ mod tests {
                 pressure_ideal: 1.0,
                 diffusion: None,
                 cost,
+                length: 1.0,
+                wall: 1.0,
+                runs: 1,
             }),
             deviations: Some([
                 Deviation { error, uncertainty },
@@ -1333,6 +1741,9 @@ mod tests {
                 pressure_ideal: 0.5,
                 diffusion: None,
                 cost,
+                length: 1.0,
+                wall: 1.0,
+                runs: 1,
             }),
             deviations: None,
         }
@@ -1417,6 +1828,9 @@ mod tests {
             units: UnitNames::of(crate::config::scene::UnitSystem::Reduced),
             length: String::new(),
             smooth: true,
+            wall_budget: WALL_BUDGET,
+            wall_seconds: 0.0,
+            lengthened: Vec::new(),
         };
         // The ΔV knob's claim stands: the rule knob keeps the scene's rule.
         assert_eq!(t.certified_all(), [true, false]);
@@ -1467,6 +1881,9 @@ mod tests {
             pressure_ideal: 2.0,
             diffusion: None,
             cost: 1.0,
+            length: 1.0,
+            wall: 1.0,
+            runs: 1,
         };
         let mut rows: Vec<Row> = [(-4.1, 0.2), (-4.0, 0.1)]
             .iter()
@@ -1482,5 +1899,167 @@ mod tests {
         assert!((d[0].error - 0.025).abs() < 1e-12);
         // P differs by 0.1 with |P_ref| = 0.1 < ρkT = 2: 5 %, not 100 %.
         assert!((d[1].error - 0.05).abs() < 1e-12);
+    }
+
+    /// Rows of one knob (the reference last) whose U/N is exact and whose P differs from the
+    /// reference by `p[k] ± u[k]` (relative), at costs 1, 2, 4, 8.
+    fn p_rows(p: [f64; 3], u: [f64; 3]) -> Vec<Row> {
+        let mut rows: Vec<Row> = (0..3)
+            .map(|k| row(0, k as f64, (1 << k) as f64, 0.0, 0.0))
+            .collect();
+        for (k, r) in rows.iter_mut().enumerate() {
+            let d = r.deviations.as_mut().unwrap();
+            d[1] = Deviation {
+                error: p[k],
+                uncertainty: u[k],
+            };
+        }
+        rows.push(row(0, 3.0, 8.0, 0.0, 0.0));
+        rows
+    }
+
+    #[test]
+    fn lengthening_picks_the_cheapest_probe_that_noise_alone_keeps_out() {
+        let b = 0.02;
+        // P of the coarsest is off by far more than its noise (10 ± 1 %): never lengthened.
+        // The second, 3.7 ± 2.1 %, may be within 2 % (3.7 − 4.2 < 2): lengthened until its
+        // error bar is b/2, (2.1 / 1)² = 4.41 times. The third is within already (0.5 ± 1).
+        let rows = p_rows([0.10, 0.037, 0.005], [0.01, 0.021, 0.01]);
+        let refs: Vec<&Row> = rows.iter().collect();
+        // The third row certifies both: nothing to lengthen.
+        assert_eq!(lengthening(&refs, b), None);
+        // Without it (its P 5 ± 1 %: off), the second is the candidate.
+        let rows = p_rows([0.10, 0.037, 0.05], [0.01, 0.021, 0.01]);
+        let refs: Vec<&Row> = rows.iter().collect();
+        let (r, f) = lengthening(&refs, b).unwrap();
+        assert_eq!(r, 1);
+        assert!((f - 4.41).abs() < 1e-9, "{f}");
+        // A difference within the target aims at 0.8 (b − e): 0.5 ± 3 % → (3 / 1.2)².
+        let rows = p_rows([0.10, 0.005, 0.05], [0.01, 0.03, 0.01]);
+        let refs: Vec<&Row> = rows.iter().collect();
+        let (r, f) = lengthening(&refs, b).unwrap();
+        assert_eq!(r, 1);
+        assert!((f - 6.25).abs() < 1e-9, "{f}");
+        // At most MAX_LENGTHENING.
+        let rows = p_rows([0.10, 0.005, 0.05], [0.01, 0.2, 0.01]);
+        let refs: Vec<&Row> = rows.iter().collect();
+        assert_eq!(lengthening(&refs, b), Some((1, MAX_LENGTHENING)));
+        // Every coarser probe off at two standard errors, or already precise (2.5 ± 0.4 %:
+        // more length would not bring it in): nothing.
+        let rows = p_rows([0.10, 0.09, 0.025], [0.01, 0.02, 0.004]);
+        let refs: Vec<&Row> = rows.iter().collect();
+        assert_eq!(lengthening(&refs, b), None);
+        // The cheapest of two candidates.
+        let rows = p_rows([0.03, 0.01, 0.05], [0.02, 0.02, 0.01]);
+        let refs: Vec<&Row> = rows.iter().collect();
+        assert_eq!(lengthening(&refs, b).map(|x| x.0), Some(0));
+        // A candidate no cheaper than the reference is not worth lengthening.
+        let mut rows = p_rows([0.10, 0.10, 0.01], [0.01, 0.01, 0.02]);
+        if let Ok(p) = &mut rows[2].probe {
+            p.cost = 8.0;
+        }
+        let refs: Vec<&Row> = rows.iter().collect();
+        assert_eq!(lengthening(&refs, b), None);
+    }
+
+    #[test]
+    fn pooled_probes_weigh_by_length_and_add_errors_as_independent_means() {
+        let probe = |u: f64, e: f64, length: f64, cost: f64| Probe {
+            energy: Measured { value: u, error: e },
+            pressure: Measured {
+                value: 2.0 * u,
+                error: 2.0 * e,
+            },
+            pressure_ideal: 1.0,
+            diffusion: None,
+            cost,
+            length,
+            wall: length * cost,
+            runs: 1,
+        };
+        // A run of 10 and one of 30: weights ¼ and ¾.
+        let a = probe(-3.0, 0.02, 10.0, 1.0);
+        let b = probe(-3.4, 0.01, 30.0, 3.0);
+        let p = a.pooled(&b);
+        assert!((p.energy.value - -3.3).abs() < 1e-12);
+        assert!((p.pressure.value - -6.6).abs() < 1e-12);
+        let e = (0.25f64 * 0.02).hypot(0.75 * 0.01);
+        assert!((p.energy.error - e).abs() < 1e-15);
+        assert!((p.pressure.error - 2.0 * e).abs() < 1e-15);
+        // Cost: 100 CPU s over 40 time units.
+        assert!((p.cost - 2.5).abs() < 1e-12);
+        assert_eq!((p.length, p.runs), (40.0, 2));
+        // Two equal runs: the error falls by √2.
+        let q = a.pooled(&a);
+        assert!((q.energy.error - 0.02 / 2f64.sqrt()).abs() < 1e-15);
+    }
+
+    #[test]
+    fn wall_budgets_read_seconds_minutes_and_hours() {
+        assert_eq!(parse_wall("540"), Ok(540.0));
+        assert_eq!(parse_wall("540s"), Ok(540.0));
+        assert_eq!(parse_wall("9m"), Ok(540.0));
+        assert_eq!(parse_wall("1.5h"), Ok(5400.0));
+        assert!(parse_wall("9 minutes").is_err());
+        assert!(parse_wall("-1").is_err());
+        assert!(parse_wall("").is_err());
+    }
+
+    #[test]
+    fn a_production_given_in_time_or_events_is_scaled_in_its_own_unit() {
+        assert_eq!(
+            Production::Time(10.0).times(3.3).as_deref(),
+            Some("run.time=33")
+        );
+        assert_eq!(
+            Production::Events(1e6).times(0.5).as_deref(),
+            Some("run.events=500000")
+        );
+        assert_eq!(Production::Scene.times(2.0), None);
+    }
+
+    #[test]
+    fn an_uncertified_quantity_is_named_with_why_noise_or_a_real_difference() {
+        let step = Knob {
+            key: "pair.0.terraces.step".to_owned(),
+            linked: Vec::new(),
+            label: "ΔV of pair 0".to_owned(),
+            unit: "ε".to_owned(),
+            value: 0.5,
+            choices: Vec::new(),
+        };
+        // P 0.5 ± 1.5 % at the two coarse probes: noise (the difference could be within 1 %).
+        let noisy = p_rows([0.005, 0.005, 0.005], [0.015, 0.015, 0.015]);
+        // P 5.8 ± 1.2 %: off at two standard errors, whatever the length.
+        let off = p_rows([0.10, 0.07, 0.058], [0.012, 0.012, 0.012]);
+        for (rows, noise) in [(noisy, true), (off, false)] {
+            let refs: Vec<&Row> = rows.iter().collect();
+            // U/N alone is judged: the cheapest probe is recommended in U/N.
+            let (r, which) = decide(&refs, 0.01).unwrap();
+            assert_eq!((r, which), (0, [true, false]));
+            let t = Tuning {
+                knobs: vec![step.clone()],
+                rows,
+                target: 0.01,
+                budget: 0.01,
+                recommended: vec![Some(r)],
+                certified: vec![which],
+                units: UnitNames::of(crate::config::scene::UnitSystem::Reduced),
+                length: String::new(),
+                smooth: true,
+                wall_budget: WALL_BUDGET,
+                wall_seconds: 0.0,
+                lengthened: Vec::new(),
+            };
+            let text = t.recommendation();
+            assert!(text.contains("P is not certified"), "{text}");
+            assert_eq!(text.contains("times longer would tell"), noise, "{text}");
+            assert_eq!(
+                text.contains("longer probes would not qualify one"),
+                !noise,
+                "{text}"
+            );
+            assert!(text.contains("--set pair.0.terraces.step=0"), "{text}");
+        }
     }
 }

@@ -40,6 +40,8 @@ fn tune_writes_its_table_and_recommends_the_cheapest_row_within_the_target() {
         &target.to_string(),
         "--time",
         "0.2",
+        "--budget",
+        "0",
         "--out",
         out.to_str().unwrap(),
     ]);
@@ -47,8 +49,12 @@ fn tune_writes_its_table_and_recommends_the_cheapest_row_within_the_target() {
     let stderr = String::from_utf8_lossy(&o.stderr).into_owned();
     assert!(o.status.success(), "{stderr}");
     // ΔV and search step at four values each, three level rules; the scene's setting and the
-    // finest ΔV (the rules' reference) are run once.
+    // finest ΔV (the rules' reference) are run once; with no budget left after the first
+    // pass, nothing is lengthened.
     assert!(stderr.contains("[10/10]"), "progress on stderr: {stderr}");
+    assert!(stderr.contains("wall-clock budget 0 s"), "{stderr}");
+    assert!(!stderr.contains("round 2"), "{stderr}");
+    assert!(stdout.contains("no probe was lengthened"), "{stdout}");
     assert!(out.join("tune.svg").is_file());
     let csv = std::fs::read_to_string(out.join("tune.csv")).unwrap();
     let mut lines = csv.lines();
@@ -110,6 +116,58 @@ fn tune_writes_its_table_and_recommends_the_cheapest_row_within_the_target() {
     }
 }
 
+/// At a target the first pass cannot certify, probes are lengthened: each lengthened probe
+/// pools runs, and a knob's reference is lengthened with its candidate.
+#[test]
+fn tune_lengthens_the_probes_that_noise_keeps_out_within_its_budget() {
+    let d = scratch("tune-longer");
+    let scene = rods_scene(&d);
+    let out = d.join("out");
+    let o = dmd(&[
+        "tune",
+        &scene,
+        "--target",
+        "0.1",
+        "--time",
+        "0.2",
+        "--budget",
+        "1h",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let stdout = String::from_utf8_lossy(&o.stdout).into_owned();
+    let stderr = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(o.status.success(), "{stderr}");
+    assert!(stderr.contains("wall-clock budget 1 h 00 min"), "{stderr}");
+    assert!(stderr.contains("round 2: "), "{stderr}");
+    assert!(stdout.contains("lengthened, each pooled"), "{stdout}");
+    let csv = std::fs::read_to_string(out.join("tune.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    let num = |r: &[&str], c: &str| r[col(c)].parse::<f64>().unwrap();
+    let mut lengthened = 0;
+    for key in ["pair.0.terraces.step_kt", "search.max_step"] {
+        let knob: Vec<&Vec<&str>> = rows.iter().filter(|r| r[0] == key).collect();
+        let long: Vec<&&Vec<&str>> = knob.iter().filter(|r| num(r, "runs") > 1.0).collect();
+        for r in &long {
+            // More production than one first-pass probe of 0.2 τ.
+            assert!(num(r, "production (τ)") > 0.2 * (1.0 + 1e-9), "{r:?}");
+        }
+        if !long.is_empty() {
+            // A candidate is lengthened with its knob's reference (the last row), unless the
+            // scene's own probe, shared with the other knob, was lengthened for that one.
+            lengthened += 1;
+            assert!(
+                num(knob[3], "runs") > 1.0 || long.iter().all(|r| r[1] == "1e-2" || r[1] == "5e-1"),
+                "{key}: {knob:?}"
+            );
+        }
+    }
+    assert!(lengthened > 0, "{csv}");
+}
+
 #[test]
 fn tune_refuses_bad_targets_and_scenes_without_a_knob() {
     let d = scratch("tune-bad");
@@ -120,6 +178,13 @@ fn tune_refuses_bad_targets_and_scenes_without_a_knob() {
         let o = dmd(&["tune", &scene, "--target", target, "--out", out]);
         assert_eq!(o.status.code(), Some(2), "--target {target}");
         assert!(String::from_utf8_lossy(&o.stderr).contains("--target"));
+    }
+    for budget in ["-1", "9 minutes", "x"] {
+        let o = dmd(&[
+            "tune", &scene, "--target", "0.02", "--budget", budget, "--out", out,
+        ]);
+        assert_eq!(o.status.code(), Some(2), "--budget {budget}");
+        assert!(String::from_utf8_lossy(&o.stderr).contains("--budget"));
     }
     let hs = crate::support::scenes_dir().join("hard-spheres.toml");
     let o = dmd(&[
