@@ -30,19 +30,19 @@
 //!                                                           r_out² − d² without inner step)
 //! ```
 //!
-//! positive inside, zero at either radius, with `ġ` from `d(d²)/dt = 2 r_αβ·u_αβ`,
-//! `u_αβ = v_ij + ω_i × d_iα − ω_j × d_jβ`. Its falling crossing is searched by
-//! `root_search` ([`Adaptive`](crate::models::search::SearchMethod::Adaptive) or the uniform
-//! [`Grid`](crate::models::search::SearchMethod::Grid) with a grazing threshold in units of
-//! `g`, i.e. length²). Each search is bracketed analytically by the bounding spheres: the
-//! sites are within `ρ_α = |d_iα|` and `ρ_β` of their centres, so the pair can only be at a
-//! radius `R` of the band while the centres are within `R + ρ_α + ρ_β` (`bracket` solves that quadratic without cancellation). A pair of molecules that is not yet
-//! within the largest such radius gets a virtual event when it arrives; there every site pair
-//! gets its own bracket, and the earliest root over all site pairs is the pair's event. With a
-//! finite [`SearchSettings::window`] each site pair's search stops at `now + window`, and the
-//! molecule pair's next event is a virtual one at the earliest stopped search, unless a root
-//! was found before it; the virtual event resumes exactly the stopped searches (bit for bit,
-//! `root_search::Method::resume`).
+//! positive inside, zero at either radius, with `ġ` from `d(d²)/dt = 2 r_αβ·u_αβ`, `u_αβ = v_ij +
+//! ω_i × d_iα − ω_j × d_jβ`. Its falling crossing is searched by `root_search`
+//! ([`Adaptive`](crate::models::search::SearchMethod::Adaptive) or the uniform
+//! [`Grid`](crate::models::search::SearchMethod::Grid) with a grazing threshold in units of `g`,
+//! i.e. length²). Each search is bracketed analytically by the bounding spheres: the sites are
+//! within `ρ_α = |d_iα|` and `ρ_β` of their centres, so the pair can only be at a radius `R` of the
+//! band while the centres are within `R + ρ_α + ρ_β` (`bracket` solves that quadratic without
+//! cancellation). A pair of molecules that is not yet within the largest such radius gets a virtual
+//! event when it arrives; there every site pair gets its own bracket, and the earliest root over
+//! all site pairs is the pair's event. With a finite [`SearchSettings::window`] each site pair's
+//! search stops at `now + window`, and the molecule pair's next event is a virtual one at the
+//! earliest stopped search, unless a root was found before it; the virtual event resumes exactly
+//! the stopped searches (bit for bit, `root_search::Method::resume`).
 //!
 //! **Impulses.** [`ImpulseRule::ContactPoint`] applies 000 §IV.B through `collide::contact` (the
 //! impulse along the line joining the two sites, at their arms from the centres); the
