@@ -101,8 +101,17 @@ impl RigidGeometry {
 /// non-finite geometry; the potential decays to zero at large distance. Implementations should
 /// be `#[inline]` and must not allocate.
 pub trait RigidPairPotential {
-    /// `U_ij` for this geometry; `+∞` for overlapping bodies.
-    fn energy(&self, g: &RigidGeometry) -> f64;
+    /// `U_ij` for this geometry; `+∞` for overlapping bodies. By default the energy of
+    /// [`evaluate`](Self::evaluate), bit for bit (`+∞` where it reports an overlap, NaN for a
+    /// non-finite geometry); a potential with a cheaper energy alone overrides it.
+    #[inline]
+    fn energy(&self, g: &RigidGeometry) -> f64 {
+        match self.evaluate(g) {
+            Ok(e) => e.energy,
+            Err(PotentialError::Overlap { .. }) => f64::INFINITY,
+            Err(_) => f64::NAN,
+        }
+    }
 
     /// Energy, force on `i` and torques on `i` and `j` (lab frame). [`PairEval::rate`] turns
     /// them into `U̇` along free motion.

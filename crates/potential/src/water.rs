@@ -425,17 +425,6 @@ impl SoftStickyDipole {
 }
 
 impl RigidPairPotential for SoftStickyDipole {
-    /// The energy of [`evaluate`](RigidPairPotential::evaluate), bit for bit; `+∞` where it
-    /// reports an overlap, NaN for a non-finite geometry.
-    #[inline]
-    fn energy(&self, g: &RigidGeometry) -> f64 {
-        match self.evaluate(g) {
-            Ok(e) => e.energy,
-            Err(PotentialError::Overlap { .. }) => f64::INFINITY,
-            Err(_) => f64::NAN,
-        }
-    }
-
     fn evaluate(&self, g: &RigidGeometry) -> Result<PairEval, PotentialError> {
         if !g.is_finite() {
             return Err(Self::overlap(g, f64::NAN, ""));

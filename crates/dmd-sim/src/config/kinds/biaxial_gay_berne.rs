@@ -194,17 +194,6 @@ fn lab_tensor(rot: &DMat3, d: DVec3) -> DMat3 {
 }
 
 impl RigidPairPotential for BiaxialGayBerne {
-    /// The energy of [`evaluate`](RigidPairPotential::evaluate), bit for bit; `+∞` where it
-    /// reports an overlap, NaN for a non-finite geometry.
-    #[inline]
-    fn energy(&self, g: &RigidGeometry) -> f64 {
-        match self.evaluate(g) {
-            Ok(e) => e.energy,
-            Err(PotentialError::Overlap { .. }) => f64::INFINITY,
-            Err(_) => f64::NAN,
-        }
-    }
-
     fn evaluate(&self, g: &RigidGeometry) -> Result<PairEval, PotentialError> {
         if !g.is_finite() {
             return Err(PotentialError::NotFinite(
