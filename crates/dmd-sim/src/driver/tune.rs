@@ -1777,16 +1777,21 @@ mod tests {
         assert_eq!(judge(&mut rows, 0.01), Some((3, [false, false])));
     }
 
-    #[test]
-    fn a_rule_knob_that_keeps_the_scene_rule_takes_no_claim_away() {
-        let step = Knob {
+    /// The ΔV knob of pair 0 at 0.5 ε, as `knobs` gives it for a terraced scene.
+    fn delta_v_knob() -> Knob {
+        Knob {
             key: "pair.0.terraces.step".to_owned(),
             linked: Vec::new(),
             label: "ΔV of pair 0".to_owned(),
             unit: "ε".to_owned(),
             value: 0.5,
             choices: Vec::new(),
-        };
+        }
+    }
+
+    #[test]
+    fn a_rule_knob_that_keeps_the_scene_rule_takes_no_claim_away() {
+        let step = delta_v_knob();
         let choice = |sets: Vec<String>| Choice {
             label: "rule".to_owned(),
             recommend: sets.clone(),
@@ -2020,14 +2025,7 @@ mod tests {
 
     #[test]
     fn an_uncertified_quantity_is_named_with_why_noise_or_a_real_difference() {
-        let step = Knob {
-            key: "pair.0.terraces.step".to_owned(),
-            linked: Vec::new(),
-            label: "ΔV of pair 0".to_owned(),
-            unit: "ε".to_owned(),
-            value: 0.5,
-            choices: Vec::new(),
-        };
+        let step = delta_v_knob();
         // P 0.5 ± 1.5 % at the two coarse probes: noise (the difference could be within 1 %).
         let noisy = p_rows([0.005, 0.005, 0.005], [0.015, 0.015, 0.015]);
         // P 5.8 ± 1.2 %: off at two standard errors, whatever the length.
