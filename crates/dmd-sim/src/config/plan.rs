@@ -145,11 +145,6 @@ impl Plan {
         matches!(self, Plan::Spheres(p) if p.all_hard_spheres())
     }
 
-    /// Stepped radial potentials of spheres (what HMC's fault injection runs on).
-    pub fn is_spheres(&self) -> bool {
-        matches!(self, Plan::Spheres(_))
-    }
-
     /// The bodies carry an attitude and angular velocity (rods, tops, rigid molecules), so a
     /// start file may give their angular velocities.
     pub fn rotates(&self) -> bool {
