@@ -11,7 +11,9 @@
 //! scale (|U/N| of the finest probe; for P the larger of |P| and ρkT, since P may be near
 //! zero), with the uncertainty of that difference from the two runs' own block-average errors
 //! (`_error` of the summary) in quadrature. A setting qualifies when `error + uncertainty` is
-//! within the target. The recommended value of each knob is its cheapest qualifying one, by CPU
+//! within the target, and a probe that missed events (`detected_misses` of its runs, and the
+//! verified misses when the scene verifies its searches) never qualifies, whatever its
+//! averages say. The recommended value of each knob is its cheapest qualifying one, by CPU
 //! seconds of production per unit of simulated time; a quantity too noisy at this probe length
 //! to be shown within the target is named as not certified and left out of the judgement.
 //!
@@ -261,6 +263,10 @@ pub struct Probe {
     pub wall: f64,
     /// Independent runs pooled into it (1, and one more for each lengthening).
     pub runs: usize,
+    /// Events its runs missed, as the run detects them (a pair found off its stored terrace,
+    /// an event not at its level: `detected_misses`), over all its runs; 0 for smd. A setting
+    /// that misses events is never within the target, whatever its averages say.
+    pub misses: u64,
 }
 
 impl Probe {
@@ -287,6 +293,7 @@ impl Probe {
             length: w,
             wall: self.wall + other.wall,
             runs: self.runs + other.runs,
+            misses: self.misses + other.misses,
         }
     }
 }
@@ -342,8 +349,11 @@ impl Row {
     }
 
     /// The largest error bound of the observables `which` selects (U/N, P); infinite for a
-    /// failed probe.
+    /// failed probe and for one that missed events.
     pub fn bound_of(&self, which: [bool; 2]) -> f64 {
+        if self.probe.as_ref().is_ok_and(|p| p.misses > 0) {
+            return f64::INFINITY;
+        }
         // `f64::max` would drop a NaN: an unknown bound must disqualify.
         self.deviations.map_or(f64::INFINITY, |d| {
             d.iter()
@@ -754,6 +764,7 @@ fn probe(text: &str, base: &Path, overrides: &[String], smooth: bool) -> Result<
             length: s.sim_time,
             wall: s.wall_seconds,
             runs: 1,
+            misses: 0,
         });
     }
     let s = run_scene(&scene, base, None, &mut Quiet)?;
@@ -791,6 +802,7 @@ fn probe(text: &str, base: &Path, overrides: &[String], smooth: bool) -> Result<
         length: s.sim_time,
         wall: s.wall_seconds,
         runs: 1,
+        misses: s.detected_misses + s.verified_misses.unwrap_or(0),
     })
 }
 
@@ -1297,11 +1309,13 @@ impl Tuning {
                 Ok(p) => {
                     let d = row.deviations.expect("judged");
                     let mark = if self.recommended[row.knob] == Some(k) {
-                        "yes  <- recommended"
+                        "yes  <- recommended".to_owned()
+                    } else if p.misses > 0 {
+                        format!("no: {} missed events", p.misses)
                     } else if row.bound() <= self.budget {
-                        "yes"
+                        "yes".to_owned()
                     } else {
-                        "no"
+                        "no".to_owned()
                     };
                     let _ = writeln!(
                         out,
@@ -1369,6 +1383,16 @@ impl Tuning {
                 .iter()
                 .rposition(|r| r.knob == k)
                 .expect("every knob has rows");
+            if let Ok(p) = &self.rows[finest].probe
+                && p.misses > 0
+            {
+                let _ = writeln!(
+                    out,
+                    "# {}: the finest probe missed {} events: it is no reference; refine the \
+                     search (a smaller search.max_step) before trusting this knob.",
+                    knob.label, p.misses
+                );
+            }
             match self.recommended[k] {
                 Some(r) if r == finest => {
                     let next = &self.rows[finest - 1];
@@ -1543,7 +1567,7 @@ impl Tuning {
         let u = self.units;
         let mut csv = format!(
             "key,value,U_per_body{x} ({e}),U_per_body{x}_error ({e}),P{x} ({p}),P{x}_error ({p}),\
-             D ({d}),D_error ({d}),cpu_seconds_per_{t} (s/{t}),production ({t}),runs,U_rel_error,\
+             D ({d}),D_error ({d}),cpu_seconds_per_{t} (s/{t}),production ({t}),runs,missed_events,U_rel_error,\
              U_rel_uncertainty,P_rel_error,P_rel_uncertainty,bound,within_target,recommended\n",
             x = if self.smooth { "_smooth" } else { "" },
             e = u.energy,
@@ -1569,6 +1593,7 @@ impl Tuning {
                         length: f64::NAN,
                         wall: f64::NAN,
                         runs: 0,
+                        misses: 0,
                     },
                     [Deviation {
                         error: f64::NAN,
@@ -1587,6 +1612,7 @@ impl Tuning {
                 p.cost,
                 p.length,
                 p.runs as f64,
+                p.misses as f64,
                 d[0].error,
                 d[0].uncertainty,
                 d[1].error,
@@ -1686,6 +1712,7 @@ mod tests {
                 length: 1.0,
                 wall: 1.0,
                 runs: 1,
+                misses: 0,
             }),
             deviations: Some([
                 Deviation { error, uncertainty },
@@ -1724,6 +1751,26 @@ mod tests {
         assert_eq!(cheapest_within(&refs, 0.1), Some(1));
     }
 
+    #[test]
+    fn a_probe_that_missed_events_is_never_within_the_target() {
+        // The cheapest row is within the budget on its averages but missed events: the next
+        // cheapest is chosen, and pooling with a clean run keeps the misses.
+        let mut missing = row(0, 2.0, 1.0, 0.001, 0.001);
+        let rows = [row(0, 1.0, 2.0, 0.001, 0.001), row(0, 0.5, 4.0, 0.0, 0.0)];
+        let refs: Vec<&Row> = std::iter::once(&missing).chain(rows.iter()).collect();
+        assert_eq!(cheapest_within(&refs, 0.01), Some(0));
+        if let Ok(p) = &mut missing.probe {
+            p.misses = 3;
+        }
+        assert_eq!(missing.bound(), f64::INFINITY);
+        let refs: Vec<&Row> = std::iter::once(&missing).chain(rows.iter()).collect();
+        assert_eq!(cheapest_within(&refs, 0.01), Some(1));
+        assert_eq!(decide(&refs, 0.01), Some((1, [true, true])));
+        let clean = rows[0].probe.clone().unwrap();
+        let pooled = missing.probe.as_ref().unwrap().pooled(&clean);
+        assert_eq!((pooled.misses, pooled.runs), (3, 2));
+    }
+
     /// A probe of U/N `u ± 0.001` and P `p ± p_err` at `cost`.
     fn probe_row(value: f64, u: f64, p: f64, p_err: f64, cost: f64) -> Row {
         Row {
@@ -1744,6 +1791,7 @@ mod tests {
                 length: 1.0,
                 wall: 1.0,
                 runs: 1,
+                misses: 0,
             }),
             deviations: None,
         }
@@ -1889,6 +1937,7 @@ mod tests {
             length: 1.0,
             wall: 1.0,
             runs: 1,
+            misses: 0,
         };
         let mut rows: Vec<Row> = [(-4.1, 0.2), (-4.0, 0.1)]
             .iter()
@@ -1981,6 +2030,7 @@ mod tests {
             length,
             wall: length * cost,
             runs: 1,
+            misses: 0,
         };
         // A run of 10 and one of 30: weights ¼ and ¾.
         let a = probe(-3.0, 0.02, 10.0, 1.0);
