@@ -52,6 +52,17 @@ pub(crate) fn refuse_keys(scene: &Scene) -> Result<(), SceneError> {
             "bonds join the `sites` of a molecule: give the species `sites`",
         ));
     }
+    if let Some(k) = scene
+        .species
+        .iter()
+        .position(|s| s.interact_beyond_bonds.is_some())
+    {
+        return Err(SceneError::invalid(
+            format!("species[{k}].interact_beyond_bonds"),
+            "only semi-flexible molecules (species with `sites` and `bonds`) have sites that \
+             meet each other: the sites of a rigid molecule keep their distances",
+        ));
+    }
     if scene.rattle.is_some() {
         return Err(SceneError::invalid(
             "rattle",
@@ -120,12 +131,24 @@ pub(crate) fn types_of(
             }
             bonds.push(Bond::new(x as usize, y as usize));
         }
-        let t = FlexibleType::new(a, &bonds).map_err(|e| {
+        let mut t = FlexibleType::new(a, &bonds).map_err(|e| {
             SceneError::invalid(
                 format!("species[{k}].bonds"),
                 format!("not a usable semi-flexible molecule: {e}"),
             )
         })?;
+        if let Some(beyond) = s.interact_beyond_bonds {
+            if !(1..=i64::from(u16::MAX)).contains(&beyond) {
+                return Err(SceneError::invalid(
+                    format!("species[{k}].interact_beyond_bonds"),
+                    format!(
+                        "must be a number of bonds ≥ 1 (bonded sites keep their distance), got \
+                         {beyond}"
+                    ),
+                ));
+            }
+            t = t.interacting_beyond(beyond as u32);
+        }
         types.push(t);
     }
     Ok(types)

@@ -75,6 +75,8 @@ pub fn check_bodies(scene: &Scene) -> Result<(), SceneError> {
         site_scene::check(scene)?;
         if scene.has_bonds() {
             flexible_scene::check(scene)?;
+        } else {
+            flexible_scene::refuse_keys(scene)?;
         }
     } else {
         site_scene::refuse_site_keys(scene)?;

@@ -377,6 +377,10 @@ pub struct SpeciesSpec {
     /// Distance constraints `[a, b]` between sites (0-based indices into `sites`), lengths as
     /// given by the positions: the species is a semi-flexible molecule.
     pub bonds: Option<Vec<[i64; 2]>>,
+    /// Sites of one semi-flexible molecule more than this many bonds apart (along the
+    /// shortest bond path) interact with each other through their `site_pair` table, as sites
+    /// of different molecules do (default: sites of one molecule do not interact).
+    pub interact_beyond_bonds: Option<i64>,
 }
 
 /// `[rattle]`: the RATTLE integration of the internal motion of semi-flexible molecules.

@@ -2146,6 +2146,32 @@ fn setup_error(scene: &Scene, config: &Configuration, units: &Units, e: SetupErr
     let name = |k: &u32| &scene.species[config.species[*k as usize] as usize].name;
     let (key, problem) = match (&e, scene.init.positions) {
         (SetupError::BoxTooSmall { .. }, _) => ("box", e.to_string()),
+        // A molecule with itself: two of its own sites that interact start inside their core.
+        (
+            SetupError::Overlap {
+                i,
+                j,
+                distance,
+                core,
+            },
+            positions,
+        ) if i == j => {
+            let s = config.species[*i as usize] as usize;
+            let conformation = match positions {
+                Positions::File => "the start file gives molecule",
+                _ => "the species' `sites` give molecule",
+            };
+            return SceneError::invalid(
+                format!("species[{s}].interact_beyond_bonds"),
+                format!(
+                    "{conformation} {i} ({}) two sites {distance:.6} apart that interact, less \
+                     than their hard-core diameter {core}; give a conformation that keeps them \
+                     apart, or count more bonds",
+                    name(i)
+                ),
+            )
+            .into();
+        }
         (SetupError::InsideCore { i, j, energy, core }, positions) => {
             let what = format!(
                 "bodies {i} ({}) and {j} ({}) start with pair energy {:.6}, at or above the \

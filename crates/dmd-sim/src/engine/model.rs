@@ -96,6 +96,22 @@ pub struct Pair {
     pub dv: DVec3,
 }
 
+impl Pair {
+    /// Body `i` (of species `s`) with itself at `now` ([`PairModel::self_pairs`]).
+    #[inline]
+    pub fn own(i: u32, s: u32, now: f64) -> Pair {
+        Pair {
+            i,
+            j: i,
+            si: s,
+            sj: s,
+            now,
+            dr: DVec3::ZERO,
+            dv: DVec3::ZERO,
+        }
+    }
+}
+
 /// An interaction model for the event loop.
 ///
 /// The loop knows bodies only by their translational record ([`Body`](crate::engine::body::Body));
@@ -170,6 +186,15 @@ pub trait PairModel {
     /// # Errors
     /// A description of the violation.
     fn check_pair(&self, pair: &Pair, listed: bool) -> Result<(), String>;
+
+    /// Whether a body of species `s` interacts with itself (sites of one semi-flexible
+    /// molecule that its bonds leave free to meet). The loop then treats the pair `(i, i)` as
+    /// any other, with `dr = dv = 0`: it sets it up, predicts, executes and checks it, and
+    /// counts its energy; an impulse within one body leaves its centre velocity unchanged.
+    #[inline(always)]
+    fn self_pairs(&self, _s: u32) -> bool {
+        false
+    }
 
     /// Body `i`'s event list was cleared: predictions saved for it may go.
     #[inline(always)]

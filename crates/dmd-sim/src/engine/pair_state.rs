@@ -135,8 +135,9 @@ impl PairStates {
 }
 
 /// Site-pair levels of molecule pairs (site molecules, rigid or semi-flexible): for each
-/// molecule pair `(lo, hi)`, `lo < hi`, with a site pair off level 0, the levels of all its
-/// site pairs, `α`-major for `lo` (`sizes` below are the two molecules' site counts).
+/// molecule pair `(lo, hi)`, `lo ≤ hi` (`lo = hi`: the site pairs of one molecule), with a
+/// site pair off level 0, the levels of all its site pairs, `α`-major for `lo` (`sizes` below
+/// are the two molecules' site counts).
 #[derive(Clone, Debug, Default)]
 pub struct SiteLevels {
     map: HashMap<(u32, u32), Box<[u16]>>,
@@ -146,7 +147,7 @@ impl SiteLevels {
     /// Key and index of site pair (`a` of `i`, `b` of `j`); `sizes` = site counts of `i`, `j`.
     #[inline]
     fn index(i: u32, j: u32, a: usize, b: usize, sizes: (usize, usize)) -> ((u32, u32), usize) {
-        if i < j {
+        if i <= j {
             ((i, j), a * sizes.1 + b)
         } else {
             ((j, i), b * sizes.0 + a)
@@ -180,7 +181,7 @@ impl SiteLevels {
         if let Some(l) = self.stored(i, j) {
             for a in 0..ni {
                 for b in 0..nj {
-                    out[a * nj + b] = if i < j { l[a * nj + b] } else { l[b * ni + a] };
+                    out[a * nj + b] = if i <= j { l[a * nj + b] } else { l[b * ni + a] };
                 }
             }
         }
@@ -232,7 +233,7 @@ impl SiteLevels {
         for _ in 0..pairs {
             let lo = r.index("a molecule of a stored pair", u64::from(n))? as u32;
             let hi = r.index("a molecule of a stored pair", u64::from(n))? as u32;
-            if lo >= hi {
+            if lo > hi {
                 return Err(format!("the stored pair ({lo}, {hi}) is not ordered"));
             }
             let len = r.index("a pair's number of site pairs", 1 << 32)? as usize;

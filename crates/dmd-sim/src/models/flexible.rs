@@ -74,8 +74,11 @@
 //! [`PairModel::log_metric`] sums it over molecules, and HMC divides it out when asked for the
 //! stiff-bond ensemble instead.
 //!
-//! **Not modelled.** Atoms of the same molecule do not interact (no intramolecular excluded
-//! volume or wells: the loop has no events of one body with itself).
+//! **Atoms of one molecule.** With [`FlexibleType::interacting_beyond`], atoms more than a
+//! given number of bonds apart meet through their site–site potential: the pair of a molecule
+//! with itself ([`PairModel::self_pairs`]), searched on the molecule's one RATTLE trajectory,
+//! with the impulse of its own constraint forces (`ConstraintSolver::within`, 000 §IV.A). The
+//! impulses sum to zero: the centre velocity stays, and the molecular virial gets nothing.
 
 pub mod rattle;
 
@@ -92,7 +95,7 @@ use crate::engine::model::{Executed, Pair, PairClass, PairModel, PairSetupError,
 use crate::engine::potential::Potentials;
 use crate::engine::saved::{StateReader, push_count};
 use crate::models::search::{SearchSettings, SearchStats, check_settings};
-use crate::models::site_pairs::{Pending, SiteAtom, SiteDistance, SiteSearch, SiteTable};
+use crate::models::site_pairs::{Firing, Pending, SiteAtom, SiteDistance, SiteSearch, SiteTable};
 
 pub use rattle::{Constraints, RattleError, Trajectory};
 
@@ -193,6 +196,10 @@ pub struct FlexibleType {
     lengths: Vec<f64>,
     reference: Vec<DVec3>,
     radii: Vec<f64>,
+    /// Fewest bonds between each two atoms, `n × n`.
+    hops: Vec<u32>,
+    /// Atom pairs `a < b` of one molecule that interact (none unless asked for).
+    own: Vec<(u16, u16)>,
 }
 
 impl FlexibleType {
@@ -247,14 +254,19 @@ impl FlexibleType {
             }
             lengths.push(d);
         }
-        // Shortest bond paths (Floyd–Warshall): connectivity and the bounding radii.
+        // Shortest bond paths (Floyd–Warshall), in length and in bonds: connectivity, the
+        // bounding radii, and which atoms of one molecule may interact.
         let mut path = vec![f64::INFINITY; n * n];
+        let mut hops = vec![u32::MAX; n * n];
         for k in 0..n {
             path[k * n + k] = 0.0;
+            hops[k * n + k] = 0;
         }
         for (b, &d) in bonds.iter().zip(&lengths) {
             path[b.a * n + b.b] = d;
             path[b.b * n + b.a] = d;
+            hops[b.a * n + b.b] = 1;
+            hops[b.b * n + b.a] = 1;
         }
         for m in 0..n {
             for x in 0..n {
@@ -262,6 +274,10 @@ impl FlexibleType {
                     let via = path[x * n + m] + path[m * n + y];
                     if via < path[x * n + y] {
                         path[x * n + y] = via;
+                    }
+                    let via = hops[x * n + m].saturating_add(hops[m * n + y]);
+                    if via < hops[x * n + y] {
+                        hops[x * n + y] = via;
                     }
                 }
             }
@@ -293,7 +309,27 @@ impl FlexibleType {
             lengths,
             reference,
             radii,
+            hops,
+            own: Vec::new(),
         })
+    }
+
+    /// The molecule whose atoms more than `bonds` bonds apart (along the shortest bond path)
+    /// interact with each other through their site species' potential, as atoms of different
+    /// molecules do (`bonds ≥ 1`: bonded atoms never interact, their distance is held).
+    pub fn interacting_beyond(mut self, bonds: u32) -> Self {
+        let n = self.masses.len();
+        self.own = (0..n)
+            .flat_map(|a| (a + 1..n).map(move |b| (a, b)))
+            .filter(|&(a, b)| self.hops[a * n + b] > bonds.max(1))
+            .map(|(a, b)| (a as u16, b as u16))
+            .collect();
+        self
+    }
+
+    /// The atom pairs `a < b` of one molecule that interact ([`interacting_beyond`](Self::interacting_beyond)).
+    pub fn own_pairs(&self) -> &[(u16, u16)] {
+        &self.own
     }
 
     /// Total mass.
@@ -618,13 +654,16 @@ impl Flexible {
                 .map_err(|e| body(e.to_string()))?;
             trajectories.push(Trajectory::new(t0, rattle.step, &q, &u));
         }
+        let own: Vec<Vec<(u16, u16)>> = types.iter().map(|t| t.own.clone()).collect();
+        let species: Vec<&[u32]> = types.iter().map(|t| &t.species[..]).collect();
         let table = SiteTable::new(
             types.iter().map(|t| (&t.species[..], &t.radii[..])),
             potentials,
             body_type,
             settings,
             mix(seed ^ 0xf1e8_0000_0000_0013),
-        );
+        )
+        .with_own_pairs(&own, &species);
         Ok(Flexible {
             types,
             constraints,
@@ -717,7 +756,13 @@ impl Flexible {
         trajectories[j as usize].trim(now);
         let before: usize =
             trajectories[i as usize].computed_steps() + trajectories[j as usize].computed_steps();
-        {
+        if i == j {
+            let mut geo = OwnGeometry {
+                traj: &mut trajectories[i as usize],
+                c: &constraints[ti],
+            };
+            table.search_due(&mut geo, (i, j), now, &mut sites, fresh);
+        } else {
             let (traj_i, traj_j) = two(trajectories, i as usize, j as usize);
             let mut geo = FlexGeometry {
                 traj_i,
@@ -740,6 +785,62 @@ impl Flexible {
             return Some((0.0, Kind::Pair(Boundary::Inner)));
         }
         table.choose(i, j, now, sites)
+    }
+
+    /// The event of two atoms of molecule `i` (`fired`): the impulse along their separation
+    /// with the impulsive constraint forces of the molecule's own bonds (000 §IV.A). The
+    /// impulses sum to zero, so the centre velocity (`vi`, and `vj`, the same body's) stays.
+    fn execute_within(
+        &mut self,
+        i: u32,
+        now: f64,
+        fired: &Firing,
+        vi: &mut DVec3,
+        vj: &mut DVec3,
+    ) -> Result<Executed, CollideError> {
+        let t = self.table.type_of(i);
+        let (q, mut u) = self.trajectories[i as usize]
+            .state_at(&self.constraints[t], now)
+            .map_err(|_| BROKEN)?;
+        self.rescale(i as usize, &mut u);
+        let (a, b) = (fired.a, fired.b);
+        let n = q[a] - q[b];
+        let judged = self.table.judge(fired, n, n.dot(u[a] - u[b]));
+        if !judged.right_way {
+            return Ok(Executed {
+                class: PairClass::Skipped,
+                delta_u: 0.0,
+                virial: 0.0,
+                overlap: judged.overlap,
+            });
+        }
+        let before = self.internal_kinetic(i as usize);
+        let ty = &self.types[t];
+        let imp = self.solver.within(
+            Molecule {
+                masses: &ty.masses,
+                positions: &q,
+                velocities: &mut u,
+                bonds: &ty.bonds,
+            },
+            a,
+            b,
+            judged.step,
+        )?;
+        // The centre of the internal velocities moves by round-off only: it stays at zero.
+        let drift = ty.centre_of(&u);
+        let u: Vec<DVec3> = u.iter().map(|&x| x - drift).collect();
+        self.restart(i, now, q, u, self.rattle.rescale)
+            .map_err(|_| BROKEN)?;
+        *vj = *vi;
+        self.kinetic_error += self.internal_kinetic(i as usize) - before + imp.delta_v;
+        Ok(Executed {
+            class: self.table.settle(i, i, fired, imp.outcome, judged.step),
+            delta_u: imp.delta_v,
+            // The molecular virial counts forces between molecules only.
+            virial: 0.0,
+            overlap: judged.overlap,
+        })
     }
 
     /// Starts molecule `i` afresh at `now` from internal positions `q` (kept as they are: the
@@ -891,6 +992,29 @@ impl SiteDistance for FlexGeometry<'_> {
     }
 }
 
+/// Where two atoms of one molecule are, on its RATTLE trajectory.
+struct OwnGeometry<'a> {
+    traj: &'a mut Trajectory,
+    c: &'a Constraints,
+}
+
+impl SiteDistance for OwnGeometry<'_> {
+    /// On the RATTLE trajectory (NaN if a step failed).
+    #[inline]
+    fn distance2(&mut self, a: usize, b: usize, t: f64) -> (f64, f64) {
+        match (
+            self.traj.atom_at(self.c, t, a),
+            self.traj.atom_at(self.c, t, b),
+        ) {
+            (Ok((qa, ua)), Ok((qb, ub))) => {
+                let (r, u) = (qa - qb, ua - ub);
+                (r.length_squared(), 2.0 * r.dot(u))
+            }
+            _ => (f64::NAN, f64::NAN),
+        }
+    }
+}
+
 /// The error an impulse reports for a molecule whose RATTLE trajectory broke.
 const BROKEN: CollideError = CollideError::FreeMotion(
     "a RATTLE step of a semi-flexible molecule failed (a bond turned by about a right angle \
@@ -908,6 +1032,11 @@ impl PairModel for Flexible {
 
     fn mass(&self, s: u32) -> f64 {
         self.types[s as usize].mass
+    }
+
+    #[inline]
+    fn self_pairs(&self, s: u32) -> bool {
+        self.table.has_own_pairs(s as usize)
     }
 
     fn setup_pair(&mut self, pair: &Pair) -> Result<(), PairSetupError> {
@@ -963,6 +1092,9 @@ impl PairModel for Flexible {
             Err(()) => return Err(BROKEN),
         };
         let (a, b) = (fired.a, fired.b);
+        if i == j {
+            return self.execute_within(i, now, &fired, vi, vj);
+        }
         let (ti, tj) = (self.table.type_of(i), self.table.type_of(j));
         // The atoms exactly as the search saw them.
         let (qi, mut ui) = self.trajectories[i as usize]

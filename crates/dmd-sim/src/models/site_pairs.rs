@@ -200,6 +200,9 @@ pub struct SiteTable {
     site_counts: Vec<usize>,
     /// The molecule type of each body.
     pub body_type: Vec<u32>,
+    /// Per molecule type, the site pairs of one molecule that interact with each other (`a <
+    /// b`; empty: none, the default), searched as the pair `(i, i)`.
+    own: Vec<TypePair>,
     levels: SiteLevels,
     pending: SavedSearches<Pending>,
     settings: SearchSettings,
@@ -250,6 +253,13 @@ impl SiteTable {
             potentials,
             type_pairs,
             n_types: site_counts.len(),
+            own: vec![
+                TypePair {
+                    pairs: Vec::new(),
+                    reach: 0.0
+                };
+                site_counts.len()
+            ],
             site_counts,
             body_type: body_type.to_vec(),
             levels: SiteLevels::default(),
@@ -259,6 +269,38 @@ impl SiteTable {
             stats: SearchStats::default(),
             reach,
         }
+    }
+
+    /// The table with the site pairs `own[t]` (`a < b`) of each molecule of type `t`
+    /// interacting with each other through their site species' potential: the pair `(i, i)`
+    /// of a molecule that [`has_own_pairs`](Self::has_own_pairs).
+    pub fn with_own_pairs(mut self, own: &[Vec<(u16, u16)>], species: &[&[u32]]) -> Self {
+        for (t, list) in own.iter().enumerate() {
+            let pairs = list
+                .iter()
+                .map(|&(a, b)| {
+                    debug_assert!(a < b);
+                    SitePair {
+                        a,
+                        b,
+                        potential: self
+                            .potentials
+                            .index(species[t][a as usize], species[t][b as usize])
+                            as u32,
+                        // Both sites move with the molecule: no bounding sphere brackets them.
+                        arms: f64::INFINITY,
+                    }
+                })
+                .collect();
+            self.own[t] = TypePair { pairs, reach: 0.0 };
+        }
+        self
+    }
+
+    /// Whether molecules of type `t` have site pairs of their own that interact.
+    #[inline]
+    pub fn has_own_pairs(&self, t: usize) -> bool {
+        !self.own[t].pairs.is_empty()
     }
 
     /// Largest centre distance at which two molecules interact.
@@ -287,10 +329,20 @@ impl SiteTable {
         self.body_type[i as usize] as usize
     }
 
-    /// The site pairs of molecules `i` and `j`, `α`-major for `i`.
+    /// The site pairs of molecules `i` and `j`, `α`-major for `i` (of one molecule with
+    /// itself for `i == j`).
     #[inline]
     pub fn pairs(&self, i: u32, j: u32) -> &[SitePair] {
+        if i == j {
+            return &self.own[self.type_of(i)].pairs;
+        }
         &self.type_pairs[self.type_of(i) * self.n_types + self.type_of(j)].pairs
+    }
+
+    /// Where the level of site pair `sp` of `(i, j)` sits in [`SiteLevels::pair`]'s order.
+    #[inline]
+    fn slot(&self, i: u32, j: u32, sp: &SitePair) -> usize {
+        sp.a as usize * self.sizes(i, j).1 + sp.b as usize
     }
 
     /// The site counts of `i` and `j`.
@@ -355,6 +407,10 @@ impl SiteTable {
         let Pair {
             i, j, now, dr, dv, ..
         } = *pair;
+        if i == j {
+            // A molecule's own sites are always within reach of each other.
+            return Ok(());
+        }
         let reach = self.type_pairs[self.type_of(i) * self.n_types + self.type_of(j)].reach;
         let Some((start, _)) = bracket(dr, dv, reach * reach) else {
             return Err(None);
@@ -426,9 +482,9 @@ impl SiteTable {
         let levels = self.levels.pair(i, j, self.sizes(i, j));
         let n = self.pairs(i, j).len();
         let mut sites = Vec::with_capacity(n);
-        for (k, &level) in levels.iter().enumerate().take(n) {
+        for k in 0..n {
             let sp = self.pairs(i, j)[k];
-            let lv = self.level(&sp, level);
+            let lv = self.level(&sp, levels[self.slot(i, j, &sp)]);
             // The band's largest radius: the outer one, or the inner one on level 0.
             let radius = if lv.outer2 < f64::INFINITY {
                 lv.outer2.sqrt()
@@ -464,8 +520,8 @@ impl SiteTable {
     ) {
         let levels = self.levels.pair(i, j, self.sizes(i, j));
         let until = now + self.settings.window;
-        for k in 0..sites.len() {
-            let due = match sites[k] {
+        for (k, site) in sites.iter_mut().enumerate() {
+            let due = match *site {
                 SiteSearch::Deferred { at, .. } => at <= now,
                 SiteSearch::Suspended(s) => s.time() <= now || !fresh,
                 _ => false,
@@ -474,14 +530,14 @@ impl SiteTable {
                 continue;
             }
             let sp = self.pairs(i, j)[k];
-            let band = Band::of(&self.level(&sp, levels[k]));
-            sites[k] = self.search_site(
+            let band = Band::of(&self.level(&sp, levels[self.slot(i, j, &sp)]));
+            *site = self.search_site(
                 geo,
                 (i, j, k as u32),
                 (sp.a as usize, sp.b as usize),
                 band,
                 now,
-                sites[k],
+                *site,
                 until,
             );
         }
@@ -719,10 +775,12 @@ impl SiteTable {
         let Some(l) = self.levels.stored(i, j) else {
             return 0.0;
         };
+        let (lo, hi) = (i.min(j), i.max(j));
         let mut e = 0.0;
-        for (k, sp) in self.pairs(i.min(j), i.max(j)).iter().enumerate() {
-            if l[k] != 0 {
-                e += self.potentials.all()[sp.potential as usize].levels()[l[k] as usize].energy;
+        for sp in self.pairs(lo, hi) {
+            let level = l[self.slot(lo, hi, sp)];
+            if level != 0 {
+                e += self.potentials.all()[sp.potential as usize].levels()[level as usize].energy;
             }
         }
         e
@@ -789,10 +847,18 @@ impl SiteTable {
         let levels = SiteLevels::read_numbers(
             r,
             n,
-            |i, j| self.pairs(i, j).len(),
+            |i, j| {
+                let (ni, nj) = self.sizes(i, j);
+                ni * nj
+            },
             |i, j, k| {
-                let sp = self.pairs(i, j)[k];
-                self.potentials.all()[sp.potential as usize].levels().len()
+                // The site pair whose level sits at `k` (none: only level 0 is possible).
+                self.pairs(i, j)
+                    .iter()
+                    .find(|sp| self.slot(i, j, sp) == k)
+                    .map_or(1, |sp| {
+                        self.potentials.all()[sp.potential as usize].levels().len()
+                    })
             },
         )?;
         Ok((levels, SearchStats::read_numbers(r)?))

@@ -554,7 +554,8 @@ where
     }
 
     /// Calls `f(i, j, stored level, level, energy)` for every listed pair `i < j` that is
-    /// stored off level 0 or closer than the reach, with the level and energy its configuration
+    /// stored off level 0 or closer than the reach, and every body with itself that
+    /// [`PairModel::self_pairs`] says interacts, with the level and energy its configuration
     /// gives ([`PairModel::configured_level`]).
     fn for_each_interacting_pair(&self, mut f: impl FnMut(u32, u32, u16, u16, f64)) {
         let reach = self.model.reach();
@@ -586,6 +587,12 @@ where
                     stored,
                 );
                 f(i, j, stored, level, energy);
+            }
+            if self.model.self_pairs(bi.species) {
+                let (level, energy) = self
+                    .model
+                    .configured_level(&Pair::own(i, bi.species, now), 0);
+                f(i, i, 0, level, energy);
             }
         }
     }
