@@ -187,10 +187,15 @@ pub trait PairModel {
     /// A description of the violation.
     fn check_pair(&self, pair: &Pair, listed: bool) -> Result<(), String>;
 
+    /// Whether any body of this model may interact with itself ([`self_pairs`](Self::self_pairs));
+    /// without, the loop carries no code for it.
+    const SELF_PAIRS: bool = false;
+
     /// Whether a body of species `s` interacts with itself (sites of one semi-flexible
-    /// molecule that its bonds leave free to meet). The loop then treats the pair `(i, i)` as
-    /// any other, with `dr = dv = 0`: it sets it up, predicts, executes and checks it, and
-    /// counts its energy; an impulse within one body leaves its centre velocity unchanged.
+    /// molecule that its bonds leave free to meet; only asked when [`SELF_PAIRS`](Self::SELF_PAIRS)).
+    /// The loop then treats the pair `(i, i)` as any other, with `dr = dv = 0`: it sets it
+    /// up, predicts, executes and checks it, and counts its energy; an impulse within one body
+    /// leaves its centre velocity unchanged.
     #[inline(always)]
     fn self_pairs(&self, _s: u32) -> bool {
         false

@@ -531,7 +531,7 @@ where
             found?;
         }
         for (i, b) in bodies.iter().enumerate() {
-            if !model.self_pairs(b.species) {
+            if !(M::SELF_PAIRS && model.self_pairs(b.species)) {
                 continue;
             }
             let i = i as u32;
@@ -780,6 +780,8 @@ where
     }
 
     fn pair_event(&mut self, i: u32, j: u32, boundary: Boundary) -> Result<(), SimError> {
+        // A body with itself ([`PairModel::self_pairs`]).
+        let own = M::SELF_PAIRS && i == j;
         if self.prefetches() {
             self.touch(i);
             self.touch(j);
@@ -813,9 +815,9 @@ where
                 time: self.epoch.value() + now,
                 source,
             })?;
-        // Within one body (`i == j`) the impulses sum to zero: the centre keeps `vi`.
-        self.bodies[ju].v = vj;
+        // Within one body (`own`) the impulses sum to zero: the model keeps `vj = vi`.
         self.bodies[iu].v = vi;
+        self.bodies[ju].v = vj;
         if ex.overlap {
             self.anomalies.overlap += 1;
         }
@@ -834,7 +836,7 @@ where
                 self.masses[bj.species as usize],
             );
             let mut dkt = 0.5 * mi * (vi.length_squared() - bi.v.length_squared());
-            if j != i {
+            if !own {
                 dkt += 0.5 * mj * (vj.length_squared() - bj.v.length_squared());
             }
             self.energy_changes(-ex.delta_u, ex.delta_u, dkt);
@@ -850,14 +852,14 @@ where
         self.bodies[iu].generation = self.bodies[iu].generation.wrapping_add(1);
         self.lists.clear(i);
         self.model.forget(i);
-        if j != i {
+        if !own {
             self.bodies[ju].generation = self.bodies[ju].generation.wrapping_add(1);
             self.lists.clear(j);
             self.model.forget(j);
         }
         let ti = self.predict(i, Skip::Nobody);
         self.set(i, ti);
-        if j != i {
+        if !own {
             let tj = self.predict(j, Skip::One(i));
             self.set(j, tj);
         }
@@ -1163,8 +1165,9 @@ where
     }
 
     /// Predicts every pair event of body `i` with its neighbours (except `skip`) and the
-    /// time it leaves its skin into `i`'s list; returns the earliest time.
-    #[inline]
+    /// time it leaves its skin into `i`'s list, and its event with itself if it has one;
+    /// returns the earliest time.
+    #[inline(always)]
     fn predict(&mut self, i: u32, skip: Skip) -> f64 {
         // Two copies of the partner loop: without fault injection (every ordinary run) the
         // loop has no test for hidden pairs at all, whose never-taken call would otherwise
@@ -1175,7 +1178,7 @@ where
         } else {
             self.predict_partners::<false>(i, skip)
         };
-        if self.model.self_pairs(self.bodies[i as usize].species) {
+        if M::SELF_PAIRS && self.model.self_pairs(self.bodies[i as usize].species) {
             t.min(self.predict_own(i))
         } else {
             t
@@ -1183,7 +1186,9 @@ where
     }
 
     /// Predicts the event of body `i` with itself ([`PairModel::self_pairs`]) into its list;
-    /// returns its time (`+∞`: none).
+    /// returns its time (`+∞`: none). Out of line: the loops of models without such pairs
+    /// stay as they were.
+    #[inline(never)]
     fn predict_own(&mut self, i: u32) -> f64 {
         let b = &self.bodies[i as usize];
         let (s, g) = (b.species, b.generation);
@@ -1572,7 +1577,7 @@ where
                         }
                     }
                 });
-            if self.model.self_pairs(bi.species) {
+            if M::SELF_PAIRS && self.model.self_pairs(bi.species) {
                 let e = self.model.pair_energy(i, i, bi.species, bi.species);
                 if e != 0.0 {
                     u.add(e);
@@ -1840,7 +1845,7 @@ where
                     }
                 });
             err?;
-            if self.model.self_pairs(bi.species) {
+            if M::SELF_PAIRS && self.model.self_pairs(bi.species) {
                 self.model
                     .check_pair(&Pair::own(i, bi.species, self.now), true)?;
             }

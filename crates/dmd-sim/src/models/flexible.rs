@@ -1034,6 +1034,8 @@ impl PairModel for Flexible {
         self.types[s as usize].mass
     }
 
+    const SELF_PAIRS: bool = true;
+
     #[inline]
     fn self_pairs(&self, s: u32) -> bool {
         self.table.has_own_pairs(s as usize)

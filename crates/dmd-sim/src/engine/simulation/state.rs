@@ -588,7 +588,7 @@ where
                 );
                 f(i, j, stored, level, energy);
             }
-            if self.model.self_pairs(bi.species) {
+            if M::SELF_PAIRS && self.model.self_pairs(bi.species) {
                 let (level, energy) = self
                     .model
                     .configured_level(&Pair::own(i, bi.species, now), 0);
