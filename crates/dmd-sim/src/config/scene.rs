@@ -377,6 +377,9 @@ pub struct SpeciesSpec {
     /// Distance constraints `[a, b]` between sites (0-based indices into `sites`), lengths as
     /// given by the positions: the species is a semi-flexible molecule.
     pub bonds: Option<Vec<[i64; 2]>>,
+    /// The shape of a hard body whose model reads its own keys: `kind` names the model, whose
+    /// scene module checks the other keys of the table (module `config::plan`).
+    pub shape: Option<toml::Table>,
 }
 
 /// `[rattle]`: the RATTLE integration of the internal motion of semi-flexible molecules.
