@@ -327,7 +327,11 @@ impl Plan {
                     })
                     .collect(),
                 kinds: Vec::new(),
-                moments: p.species.iter().map(|s| [s.inertia, s.inertia, 0.0]).collect(),
+                moments: p
+                    .species
+                    .iter()
+                    .map(|s| [s.inertia, s.inertia, 0.0])
+                    .collect(),
             },
         }
     }

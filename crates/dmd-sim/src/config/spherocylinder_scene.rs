@@ -415,7 +415,7 @@ mod tests {
         let text = format!(
             "version = 1\n[box]\ndensity = 0.03\n[[species]]\nname = \"R\"\ncount = 64\n\
              shape = {{ kind = \"spherocylinder\", length = 3.0, diameter = 1.0 }}\n{extra}\n\
-             [init]\ntemperature = 1.0\n[run]\nevents = 100\n"
+             [init]\npositions = \"sc\"\ntemperature = 1.0\n[run]\nevents = 100\n"
         );
         Scene::from_str_with(&text, &[])
     }
@@ -431,7 +431,9 @@ mod tests {
 
     #[test]
     fn bad_shapes_name_their_key() {
-        assert!(scene("").is_ok());
+        if let Err(e) = scene("") {
+            panic!("{e}");
+        }
         let key = |e: SceneError| match e {
             SceneError::Invalid { key, .. } => key,
             other => panic!("{other}"),
@@ -439,7 +441,7 @@ mod tests {
         let bad = |shape: &str| {
             let text = format!(
                 "version = 1\n[box]\ndensity = 0.03\n[[species]]\nname = \"R\"\ncount = 64\n\
-                 shape = {shape}\n[init]\ntemperature = 1.0\n[run]\nevents = 100\n"
+                 shape = {shape}\n[init]\npositions = \"sc\"\ntemperature = 1.0\n[run]\nevents = 100\n"
             );
             key(Scene::from_str_with(&text, &[]).unwrap_err())
         };
