@@ -326,7 +326,9 @@ impl Spherocylinders {
         let (enter, exit) = bracket(pair.dr, pair.dv, reach * reach)?;
         let end = exit.min(horizon);
         let b = fl.bound();
-        if !(enter <= end) || !(b > 0.0) {
+        // Written so that a NaN bound or window counts as nothing to find.
+        let (in_time, moving) = (enter <= end, b > 0.0);
+        if !in_time || !moving {
             // Out of reach before the horizon, or nothing moves (the gap stays as it is).
             return None;
         }
