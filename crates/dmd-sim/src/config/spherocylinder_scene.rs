@@ -19,7 +19,7 @@ use rand_xoshiro::Xoshiro256PlusPlus;
 use crate::analysis::output::given;
 use crate::config::init::{Configuration, read_orientations};
 use crate::config::rods::{equipartitioned_omegas, rotor_omegas};
-use crate::config::scene::{Engine, Orientations, Positions, Scene, SceneError};
+use crate::config::scene::{Engine, Orientations, Positions, Scene, SceneError, positive};
 use crate::models::spherocylinders::{Spherocylinder, Spherocylinders, closest_points};
 
 /// The `kind` of a spherocylinder's `shape` table.
@@ -272,6 +272,28 @@ pub(crate) fn check(scene: &Scene) -> Result<(), SceneError> {
             "`file` gives spherocylinders the angular velocities of `init.file`, which belong \
              to its orientations: set `orientations = \"file\"` too",
         ));
+    }
+    // The axes' correlation function samples the axes at every sample.
+    if let Some(c) = &scene.output.orientation_acf {
+        positive("output.orientation_acf.max_lag", c.max_lag)?;
+        match scene.output.sample_interval {
+            None => {
+                return Err(SceneError::invalid(
+                    "output.sample_interval",
+                    "needed by `output.orientation_acf`: the simulated time between samples",
+                ));
+            }
+            Some(dt) if c.max_lag < dt => {
+                return Err(SceneError::invalid(
+                    "output.orientation_acf.max_lag",
+                    format!(
+                        "{} is shorter than output.sample_interval = {dt}",
+                        given(c.max_lag)
+                    ),
+                ));
+            }
+            _ => {}
+        }
     }
     Ok(())
 }
