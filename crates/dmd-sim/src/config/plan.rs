@@ -74,6 +74,9 @@ pub struct Drawings {
 pub fn check_bodies(scene: &Scene) -> Result<(), SceneError> {
     if spherocylinder_scene::is_spherocylinders(scene) {
         spherocylinder_scene::check(scene)?;
+        // What molecules' keys the spherocylinders' own check leaves to their modules.
+        site_scene::refuse_site_keys(scene)?;
+        flexible_scene::refuse_keys(scene)?;
     } else if scene.has_sites() {
         site_scene::check(scene)?;
         if scene.has_bonds() {
