@@ -59,13 +59,14 @@ mod models;
 
 pub use analysis::{block, observable, output, reference, smooth};
 pub use config::{
-    flexible_scene, init, kinds, limits, plan, rods, scene, site_scene, smd_spec, units,
+    flexible_scene, init, kinds, limits, plan, rods, scene, site_scene, smd_spec,
+    spherocylinder_scene, units,
 };
 pub use driver::{chains, checkpoint, hmc, interrupt, outdir, run, smd_engine, tune};
 pub use engine::{
     body, cell, event, model, neighbour, pair_state, potential, saved, schedule, simulation, sum,
 };
-pub use models::{flexible, rotor, search, site_pairs, sites, terraced};
+pub use models::{flexible, rotor, search, site_pairs, sites, spherocylinders, terraced};
 
 /// The README's example, compiled and run as a doctest so it cannot go stale.
 #[cfg(doctest)]

@@ -12,4 +12,5 @@ pub mod rods;
 pub mod scene;
 pub mod site_scene;
 pub mod smd_spec;
+pub mod spherocylinder_scene;
 pub mod units;

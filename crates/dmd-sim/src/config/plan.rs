@@ -1,6 +1,6 @@
 //! Which model a scene builds: [`Plan`] is the one place that branches on the body kind
 //! (stepped spheres, terraced rods or tops of a potential kind, rigid site molecules,
-//! semi-flexible molecules). [`Plan::of`] decides it with the tables of that model; the plan
+//! semi-flexible molecules, hard spherocylinders). [`Plan::of`] decides it with the tables of that model; the plan
 //! then answers what the driver asks of a body kind (its reach and name, how frames draw it,
 //! whether its bodies rotate, how a start file gives its molecules) and builds the model for
 //! a [`UseModel`], which receives it as a type: the event loop stays statically dispatched
@@ -19,6 +19,7 @@ use crate::config::init::{
 use crate::config::kinds::{self, Built, Kind, TerracedPlan, Visit};
 use crate::config::rods::Bodies;
 use crate::config::scene::{Orientations, Scene, SceneError};
+use crate::config::spherocylinder_scene::{self, SpherocylindersPlan};
 use crate::config::{flexible_scene, site_scene};
 use crate::engine::model::{HardSpheres, PairModel, Stepped};
 use crate::engine::potential::Potentials;
@@ -71,7 +72,12 @@ pub struct Drawings {
 /// # Errors
 /// [`SceneError`] naming the key.
 pub fn check_bodies(scene: &Scene) -> Result<(), SceneError> {
-    if scene.has_sites() {
+    if spherocylinder_scene::is_spherocylinders(scene) {
+        spherocylinder_scene::check(scene)?;
+        // What molecules' keys the spherocylinders' own check leaves to their modules.
+        site_scene::refuse_site_keys(scene)?;
+        flexible_scene::refuse_keys(scene)?;
+    } else if scene.has_sites() {
         site_scene::check(scene)?;
         if scene.has_bonds() {
             flexible_scene::check(scene)?;
@@ -96,6 +102,8 @@ pub enum Plan {
     Sites(site_scene::SitesPlan),
     /// Semi-flexible molecules (species with `bonds`): RATTLE between events.
     Flexible(flexible_scene::FlexiblePlan),
+    /// Hard spherocylinders (species with a `shape`): no potential but the hard shells.
+    Spherocylinders(SpherocylindersPlan),
 }
 
 impl Plan {
@@ -104,6 +112,9 @@ impl Plan {
     /// # Errors
     /// [`SceneError::Invalid`] naming the pair table whose potential or terraces fail.
     pub fn of(scene: &Scene) -> Result<Plan, SceneError> {
+        if spherocylinder_scene::is_spherocylinders(scene) {
+            return Ok(Plan::Spherocylinders(SpherocylindersPlan::of(scene)?));
+        }
         if scene.has_bonds() {
             return Ok(Plan::Flexible(flexible_scene::FlexiblePlan::of(scene)?));
         }
@@ -128,6 +139,7 @@ impl Plan {
             Plan::Terraced(t) => t.reach,
             Plan::Sites(p) => p.reach(),
             Plan::Flexible(p) => p.reach(),
+            Plan::Spherocylinders(p) => p.reach(),
         }
     }
 
@@ -139,6 +151,7 @@ impl Plan {
             Plan::Terraced(t) => t.model_name,
             Plan::Sites(_) => "rigid-sites",
             Plan::Flexible(_) => "semi-flexible",
+            Plan::Spherocylinders(_) => "hard-spherocylinders",
         }
     }
 
@@ -150,11 +163,14 @@ impl Plan {
     /// The bodies carry an attitude and angular velocity (rods, tops, rigid molecules), so a
     /// start file may give their angular velocities.
     pub fn rotates(&self) -> bool {
-        matches!(self, Plan::Terraced(_) | Plan::Sites(_))
+        matches!(
+            self,
+            Plan::Terraced(_) | Plan::Sites(_) | Plan::Spherocylinders(_)
+        )
     }
 
-    /// The smallest hard-core diameter of stepped spheres (0 for other bodies): a lattice
-    /// denser than it allows holds no species.
+    /// The smallest hard-core diameter of stepped spheres or spherocylinders (0 for other
+    /// bodies): a lattice denser than it allows holds no species.
     pub fn smallest_core(&self) -> f64 {
         let core = match self {
             Plan::Spheres(potentials) => potentials
@@ -162,6 +178,7 @@ impl Plan {
                 .iter()
                 .filter_map(|p| p.core())
                 .fold(f64::INFINITY, f64::min),
+            Plan::Spherocylinders(p) => p.smallest_diameter(),
             _ => 0.0,
         };
         if core.is_finite() { core } else { 0.0 }
@@ -171,10 +188,12 @@ impl Plan {
     /// re-basing, so the interval is also how long a stop can take: 10⁶ events of spheres or
     /// rods take about a second; an event of rigid-site or semi-flexible molecules costs tens of
     /// times more (site searches, RATTLE), so theirs is 10⁴, and a re-basing still costs about
-    /// 1 % of the run (every pair predicted once against `100 N` events).
+    /// 1 % of the run (every pair predicted once against `100 N` events); spherocylinders'
+    /// conservative advancement costs several times a sphere's event, so theirs is 10⁵.
     pub fn fewest_rebase_events(&self) -> u64 {
         match self {
             Plan::Sites(_) | Plan::Flexible(_) => 10_000,
+            Plan::Spherocylinders(_) => 100_000,
             Plan::Spheres(_) | Plan::Terraced(_) => 1_000_000,
         }
     }
@@ -210,7 +229,8 @@ impl Plan {
     /// How trajectory frames draw each species: spheres of their hard-core diameter (or
     /// innermost step), rods as the ellipsoids of their potential ([`rod_semi_axes`]), tops
     /// as their kind draws them, rigid site molecules as their sites, semi-flexible molecules
-    /// as their atoms; with the moments of inertia of each species' body frame.
+    /// as their atoms, spherocylinders as the ellipsoids of their length and width; with the
+    /// moments of inertia of each species' body frame.
     pub fn drawings(&self, scene: &Scene) -> Drawings {
         let diameter =
             |p: &crate::engine::potential::StepPotential| p.core().unwrap_or(p.radii()[0]);
@@ -299,6 +319,25 @@ impl Plan {
                     .collect(),
                 moments: Vec::new(),
             },
+            Plan::Spherocylinders(p) => Drawings {
+                species: p
+                    .species
+                    .iter()
+                    .map(|s| Drawing::Rod {
+                        semi_axes: [
+                            0.5 * s.diameter,
+                            0.5 * s.diameter,
+                            0.5 * (s.length + s.diameter),
+                        ],
+                    })
+                    .collect(),
+                kinds: Vec::new(),
+                moments: p
+                    .species
+                    .iter()
+                    .map(|s| [s.inertia, s.inertia, 0.0])
+                    .collect(),
+            },
         }
     }
 
@@ -375,6 +414,11 @@ impl Plan {
             Plan::Flexible(plan) => {
                 let start = molecules.map(|m| (m.atoms, m.internal));
                 let model = flexible_scene::model(scene, config, plan, resumed, start)?;
+                user.use_model(model, None)
+            }
+            Plan::Spherocylinders(plan) => {
+                let model =
+                    spherocylinder_scene::model(scene, base, config, plan, resumed, omegas)?;
                 user.use_model(model, None)
             }
         })

@@ -370,6 +370,9 @@ pub struct SpeciesSpec {
     /// any shape (an asymmetric top), for potentials that read each body's whole attitude
     /// (`ssd-e`).
     pub moments: Option<[f64; 3]>,
+    /// The shape of a hard body whose model reads its own keys: `kind` names the model, whose
+    /// scene module checks the other keys of the table (module `config::plan`).
+    pub shape: Option<toml::Table>,
     /// The atoms of a rigid site molecule.
     pub sites: Option<Vec<SiteSpec>>,
     /// Or: a shipped rigid site molecule.

@@ -8,4 +8,5 @@ pub mod rotor;
 pub mod search;
 pub mod site_pairs;
 pub mod sites;
+pub mod spherocylinders;
 pub mod terraced;

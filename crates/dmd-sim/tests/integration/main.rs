@@ -23,6 +23,7 @@ mod sites;
 mod sites_scenes;
 mod smd_engine;
 mod smooth;
+mod spherocylinders;
 mod support;
 mod terminal;
 mod tops;
