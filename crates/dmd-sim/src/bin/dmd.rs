@@ -262,6 +262,7 @@ fn kind(model: &str) -> &str {
         "smd-lennard-jones" => "Lennard-Jones spheres",
         "smd-gay-berne" => "Gay-Berne ellipsoids, smooth potential",
         "smd-ssd-e" => "SSD/E water",
+        "smd-spc-e" => "SPC/E water",
         other => other,
     }
 }

@@ -368,7 +368,7 @@ pub struct SpeciesSpec {
     pub inertia: Option<f64>,
     /// Principal moments of inertia `[I_x, I_y, I_z]` about the body axes of a rigid body of
     /// any shape (an asymmetric top), for potentials that read each body's whole attitude
-    /// (`ssd-e`).
+    /// (`ssd-e`, `spc-e`, `biaxial-gay-berne`).
     pub moments: Option<[f64; 3]>,
     /// The atoms of a rigid site molecule.
     pub sites: Option<Vec<SiteSpec>>,
@@ -501,6 +501,9 @@ pub enum PotentialSpec {
     Stockmayer(StockmayerSpec),
     /// Biaxial Gay–Berne ellipsoids (Berardi, Fava and Zannoni) between rigid tops.
     BiaxialGayBerne(BiaxialGayBerneSpec),
+    /// SPC/E water: three sites, site–site Lennard-Jones and damped shifted force Coulomb,
+    /// between rigid tops; molecular units only.
+    SpcE(SpcESpec),
 }
 
 impl PotentialSpec {
@@ -513,6 +516,7 @@ impl PotentialSpec {
             PotentialSpec::SsdE(k) => k,
             PotentialSpec::Stockmayer(k) => k,
             PotentialSpec::BiaxialGayBerne(k) => k,
+            PotentialSpec::SpcE(k) => k,
         }
     }
 
@@ -525,6 +529,7 @@ impl PotentialSpec {
             PotentialSpec::SsdE(k) => k,
             PotentialSpec::Stockmayer(k) => k,
             PotentialSpec::BiaxialGayBerne(k) => k,
+            PotentialSpec::SpcE(k) => k,
         }
     }
 
@@ -657,6 +662,20 @@ fn nu() -> f64 {
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct SsdESpec {
+    /// Internal energy units per kJ/mol (set by `Scene::internal`, not a scene key).
+    #[serde(skip, default = "one")]
+    pub energy_unit: f64,
+}
+
+/// The keys of `kind = "spc-e"` (`config::kinds::spc_e`): the damped shifted force Coulomb
+/// term's damping and the site cut-off; bodies are rigid tops with `moments`.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SpcESpec {
+    /// Damping α of the Coulomb term (1/Å; default 0.2, Fennell and Gezelter 2006).
+    pub alpha: Option<f64>,
+    /// Site–site cut-off R_c of both terms (Å; default 9).
+    pub r_cut: Option<f64>,
     /// Internal energy units per kJ/mol (set by `Scene::internal`, not a scene key).
     #[serde(skip, default = "one")]
     pub energy_unit: f64,
@@ -1883,7 +1902,8 @@ impl Scene {
                         format!("species[{k}].moments"),
                         "needed: the potential reads the whole attitude of each body, so the \
                          bodies are rigid tops with principal moments [I_x, I_y, I_z] about \
-                         their body axes (water: [1.7696, 0.6145, 1.1550] g/mol·Å²; a uniform \
+                         their body axes (SSD/E water: [1.7696, 0.6145, 1.1550] g/mol·Å², \
+                         SPC/E: [1.9408, 0.5968, 1.3440]; a uniform \
                          ellipsoid of semi-axes a, b, c: m/5·[b² + c², a² + c², a² + b²])",
                     ));
                 }
@@ -1891,7 +1911,7 @@ impl Scene {
                     return Err(SceneError::invalid(
                         format!("species[{k}].moments"),
                         "only bodies of a potential that reads whole attitudes (`ssd-e`, \
-                         `biaxial-gay-berne`) have three moments: remove the key",
+                         `spc-e`, `biaxial-gay-berne`) have three moments: remove the key",
                     ));
                 }
                 (None, false) => {}
