@@ -29,3 +29,4 @@ mod tops;
 mod trajectory_tools;
 mod tune;
 mod water_smd;
+mod water_spce;
