@@ -1902,8 +1902,7 @@ impl Scene {
                         format!("species[{k}].moments"),
                         "needed: the potential reads the whole attitude of each body, so the \
                          bodies are rigid tops with principal moments [I_x, I_y, I_z] about \
-                         their body axes (SSD/E water: [1.7696, 0.6145, 1.1550] g/mol·Å², \
-                         SPC/E: [1.9408, 0.5968, 1.3440]; a uniform \
+                         their body axes (water: [1.7696, 0.6145, 1.1550] g/mol·Å²; a uniform \
                          ellipsoid of semi-axes a, b, c: m/5·[b² + c², a² + c², a² + b²])",
                     ));
                 }
