@@ -87,12 +87,12 @@ pub use placement::{Layout, Placement, StepEnergy};
 pub use profile::{Profile, Shell};
 pub use rigid::{RigidGeometry, RigidPairPotential, Uniaxial};
 pub use rod::LjRod;
+pub use site_site::{Dsf, Site, SiteSite};
 pub use smoothing::Smoothed;
 pub use terrace::{
     Bounds, DEFAULT_CORE_DEPTHS, DEFAULT_MINIMUM_TOLERANCE, LevelSet, MAX_LEVELS, NearMinimum,
     Steps, TerraceMap, TerraceOptions,
 };
-pub use site_site::{Dsf, Site, SiteSite};
 pub use water::{SoftStickyDipole, SsdParameters};
 
 /// The README's example, compiled and run as a doctest so it cannot go stale.

@@ -181,7 +181,10 @@ impl LjTerm {
         let s2 = sigma2 / (r * r);
         let s6 = s2 * s2 * s2;
         let s12 = s6 * s6;
-        (four_eps * (s12 - s6), -four_eps * (12.0 * s12 - 6.0 * s6) / r)
+        (
+            four_eps * (s12 - s6),
+            -four_eps * (12.0 * s12 - 6.0 * s6) / r,
+        )
     }
 
     /// `u_LJ(r)` and its derivative for `r < R_c` (the caller cuts).
@@ -434,9 +437,13 @@ impl SiteSite {
                 } else {
                     0.0
                 };
-                let lj = t
-                    .lj
-                    .map_or(0.0, |l| -(if d <= l.r_star { l.u_star } else { l.value(d, rc) }));
+                let lj = t.lj.map_or(0.0, |l| {
+                    -(if d <= l.r_star {
+                        l.u_star
+                    } else {
+                        l.value(d, rc)
+                    })
+                });
                 c + lj
             })
             .sum()
@@ -475,13 +482,14 @@ impl SiteSite {
             bounds.push(b);
         }
         // The highest cell is the barrier; the minimum is over the cells outside it.
-        let (top, barrier) = bounds
-            .iter()
-            .copied()
-            .enumerate()
-            .fold((0, f64::NEG_INFINITY), |best, (k, b)| {
-                if b > best.1 { (k, b) } else { best }
-            });
+        let (top, barrier) =
+            bounds
+                .iter()
+                .copied()
+                .enumerate()
+                .fold((0, f64::NEG_INFINITY), |best, (k, b)| {
+                    if b > best.1 { (k, b) } else { best }
+                });
         let minimum = bounds[..=top].iter().copied().fold(0.0, f64::min);
         if !(minimum.is_finite() && barrier > 0.0) {
             return Err(PotentialError::Parameter {
@@ -492,7 +500,11 @@ impl SiteSite {
             });
         }
         // The bottom cell with a bound of +∞ only: the bound never fell to −∞.
-        let barrier = if bounds.len() == n { f64::INFINITY } else { barrier };
+        let barrier = if bounds.len() == n {
+            f64::INFINITY
+        } else {
+            barrier
+        };
         Ok((minimum, barrier))
     }
 
@@ -562,8 +574,8 @@ impl RigidPairPotential for SiteSite {
                 let e = libm::erfc(x);
                 let gauss = (-self.alpha2 * r2).exp();
                 u += t.coulomb * (e * inv_r - self.c_shift + self.c_slope * (r - rc));
-                du += t.coulomb * (-e * inv_r * inv_r - self.two_a_sqrt_pi * gauss * inv_r
-                    + self.c_slope);
+                du += t.coulomb
+                    * (-e * inv_r * inv_r - self.two_a_sqrt_pi * gauss * inv_r + self.c_slope);
             }
             if let Some(lj) = &t.lj {
                 let (v, dv) = lj.eval(r, rc);
@@ -649,7 +661,11 @@ mod tests {
         // Dipole 2.351 D along body z (0.2081943 e Å per D).
         let mu: DVec3 = s.iter().map(|x| x.charge * x.position).sum();
         assert!(mu.x == 0.0 && mu.y.abs() < 1e-16 && mu.z > 0.0);
-        assert!((mu.z / 0.208_194_3 - 2.351).abs() < 1e-3, "{}", mu.z / 0.2081943);
+        assert!(
+            (mu.z / 0.208_194_3 - 2.351).abs() < 1e-3,
+            "{}",
+            mu.z / 0.2081943
+        );
     }
 
     #[test]
@@ -671,8 +687,16 @@ mod tests {
     fn spc_e_bounds() {
         let w = SiteSite::spc_e();
         // The loose bound and a barrier far above any hard core a scene would use.
-        assert!(w.minimum() < -30.0 && w.minimum() > -2000.0, "{}", w.minimum());
-        assert!(w.barrier() > 1e4 && w.barrier().is_finite(), "{}", w.barrier());
+        assert!(
+            w.minimum() < -30.0 && w.minimum() > -2000.0,
+            "{}",
+            w.minimum()
+        );
+        assert!(
+            w.barrier() > 1e4 && w.barrier().is_finite(),
+            "{}",
+            w.barrier()
+        );
         assert!(w.reach(-0.5).unwrap() < w.cutoff());
         assert!(w.reach(0.5).unwrap() < w.cutoff());
         assert!(w.reach(-10.0).unwrap() < w.reach(-0.5).unwrap());

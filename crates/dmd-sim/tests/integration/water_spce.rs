@@ -37,15 +37,21 @@ fn terraced_spc_e_conserves_energy_and_misses_nothing() {
         "run.events=1500",
         "output.sample_interval=0.0005",
     ]);
-    let s = run_scene(&scene, Path::new("."), Some(&dir), &mut Quiet)
-        .unwrap_or_else(|e| panic!("{e}"));
+    let s =
+        run_scene(&scene, Path::new("."), Some(&dir), &mut Quiet).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(s.model, "terraced-tops");
     assert_eq!(s.n_bodies, 1000);
     assert_eq!(s.detected_misses, 0);
-    assert!(s.relative_energy_drift <= 1e-10, "{}", s.relative_energy_drift);
+    assert!(
+        s.relative_energy_drift <= 1e-10,
+        "{}",
+        s.relative_energy_drift
+    );
     // A few hundred events into the melting of the lattice: the smooth estimator runs along
     // (the molecules still sit near their sites, U/N of order kJ/mol).
-    let smooth = s.potential_energy_per_body_smooth.expect("smooth estimator");
+    let smooth = s
+        .potential_energy_per_body_smooth
+        .expect("smooth estimator");
     assert!((-60.0..20.0).contains(&smooth), "U/N = {smooth} kJ/mol");
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -67,9 +73,17 @@ fn standard_md_runs_spc_e_as_rigid_tops() {
         "U/N = {} kJ/mol",
         s.potential_energy_per_body
     );
-    assert!(s.relative_energy_drift < 1e-2, "{}", s.relative_energy_drift);
+    assert!(
+        s.relative_energy_drift < 1e-2,
+        "{}",
+        s.relative_energy_drift
+    );
     // The window is the potential's own: site cut-off 9 Å ∓ twice the hydrogens' arm.
-    assert!((s.smoothing[1] - 10.928_283).abs() < 1e-5, "{:?}", s.smoothing);
+    assert!(
+        (s.smoothing[1] - 10.928_283).abs() < 1e-5,
+        "{:?}",
+        s.smoothing
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -147,7 +147,11 @@ fn parallel_dimer_by_hand() {
         + lj_sf(d, rc);
     let g = RigidGeometry::new(DVec3::new(d, 0.0, 0.0), DQuat::IDENTITY, DQuat::IDENTITY);
     let e = w.evaluate(&g).unwrap();
-    assert!((e.energy - want).abs() < 1e-11 * want.abs(), "{} vs {want}", e.energy);
+    assert!(
+        (e.energy - want).abs() < 1e-11 * want.abs(),
+        "{} vs {want}",
+        e.energy
+    );
     // 13.506 286 921 69 kJ/mol from the same formulas in Python's math.erfc.
     assert!((e.energy - 13.506_286_921_69).abs() < 1e-9, "{}", e.energy);
     // The mirrors y → −y and x → d − x (which swaps the molecules): the force is along x,
