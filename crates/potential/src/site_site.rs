@@ -99,9 +99,10 @@ pub struct Dsf {
 }
 
 impl Dsf {
-    /// `α = 0.2 Å⁻¹`, `R_c = 9 Å`: FG06's damping for water at the shorter of its cut-offs
-    /// (their recommendation is `α ≈ 0.2 Å⁻¹` for cut-offs of 9–12 Å, with SPC/E among the
-    /// systems it was tested on against smooth particle-mesh Ewald).
+    /// `α = 0.2 Å⁻¹`, `R_c = 9 Å`: the damping of FG06's DSF with the shortest cut-off of the
+    /// range they compare with smooth particle-mesh Ewald (SPC/E water among their systems);
+    /// the shortest, because the terraced engine's cells must fit the reach three times
+    /// along the box.
     pub const FG06: Self = Self {
         alpha: 0.2,
         r_cut: 9.0,
