@@ -46,8 +46,8 @@
 //!
 //! **The minimum behind a barrier.** A molecule whose charged sites carry no Lennard-Jones
 //! core (SPC/E's hydrogens) is unbounded below: a hydrogen of one molecule pulled onto the
-//! oxygen of another gains `−∞` from the Coulomb term, past a Lennard-Jones wall of about
-//! 10⁵ kJ/mol between the oxygens. No trajectory below that wall reaches it. The lower bound,
+//! oxygen of another gains `−∞` from the Coulomb term, past a Lennard-Jones wall between the
+//! oxygens (the bound below puts it at 2.7·10⁵ kJ/mol). No trajectory below that wall reaches it. The lower bound,
 //! taken on cells of `R` of 10⁻³ Å (each cell's attractive terms at its inner edge, the
 //! Lennard-Jones terms at their lowest over the cell), rises to a highest cell, the
 //! [`barrier`](SiteSite::barrier), before it falls to `−∞`: every path from far apart to
@@ -56,7 +56,7 @@
 //! configuration a terraced or standard-MD trajectory can reach while its energy stays below
 //! the barrier (a terrace map's hard core must lie below it, which the scene checks). The bound
 //! ignores that the attractive pairs cannot all be at their closest at once, so it is loose
-//! (about −800 kJ/mol for SPC/E against a dimer minimum of about −30 kJ/mol).
+//! (−1332 kJ/mol for SPC/E, where dimers sit at tens of kJ/mol below zero).
 
 use glam::DVec3;
 
