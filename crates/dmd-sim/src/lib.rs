@@ -10,7 +10,7 @@
 //! event times of spheres are analytic (a quadratic per boundary), and the time origin is
 //! re-based periodically.
 //!
-//! Rigid bodies ([`terraced`], seed 003) — rods, or bodies of any shape such as SSD/E water
+//! Rigid bodies ([`terraced`], seed 003) — rods, or bodies of any shape such as SSD/E or SPC/E water
 //! molecules, whose rotation is a [`rotor::Rotor`] — interact through a smooth
 //! orientation-dependent pair potential mapped onto energy terraces; they rotate exactly between
 //! events, their event times are found by root searches with virtual events, and the impulse

@@ -29,6 +29,9 @@
 //! - [`SoftStickyDipole`] (the [`water`] module): the single-site SSD/E water of Fennell and
 //!   Gezelter (2004) in kJ/mol, Å, amu, ps, switched to zero at a 9 Å cut-off, with its inertia
 //!   tensor and rigorous bounds (minimum, reach of a level) for the terrace map;
+//! - [`SiteSite`] (the [`site_site`] module): rigid molecules of sites with site–site
+//!   Lennard-Jones and damped shifted force Coulomb terms (Fennell and Gezelter 2006), forces
+//!   and torques from the site forces, and SPC/E water;
 //! - [`reach`], [`virial`], [`quadrature`]: the reach of a level for any potential, second virial
 //!   coefficients of the smooth and terraced potentials, and the quadrature behind them.
 //!
@@ -68,6 +71,7 @@ pub mod quadrature;
 pub mod reach;
 pub mod rigid;
 mod rod;
+pub mod site_site;
 mod smoothing;
 mod solve;
 mod terrace;
@@ -83,6 +87,7 @@ pub use placement::{Layout, Placement, StepEnergy};
 pub use profile::{Profile, Shell};
 pub use rigid::{RigidGeometry, RigidPairPotential, Uniaxial};
 pub use rod::LjRod;
+pub use site_site::{Dsf, Site, SiteSite};
 pub use smoothing::Smoothed;
 pub use terrace::{
     Bounds, DEFAULT_CORE_DEPTHS, DEFAULT_MINIMUM_TOLERANCE, LevelSet, MAX_LEVELS, NearMinimum,

@@ -95,7 +95,7 @@ impl<P: PairPotential> sealed::Evaluate for Smoothed<P> {
 }
 
 /// A [`RigidPairPotential`] of rigid tops that is identically zero beyond `cutoff` (a
-/// potential switched off by its own smooth switch, as SSD/E at 9 Å), evaluated on the
+/// potential switched off by its own smooth switch or cut-off, as SSD/E and SPC/E water), evaluated on the
 /// bodies' whole attitudes (body → lab, the body frame being the principal frame of
 /// [`BodyModel::Rigid`]). It needs no [`Smoothed`] window: the list keeps the pairs within
 /// `cutoff`, and pairs beyond it contribute nothing.

@@ -9,7 +9,7 @@
 //!   [`potential::Smoothed`]) and evaluated with the same `PairPotential::evaluate` as the
 //!   event-driven engine, generic over the potential (static dispatch); rigid tops on a
 //!   full-attitude [`potential::RigidPairPotential`] that vanishes beyond its own cut-off
-//!   (SSD/E water) through [`Rigid`], with the forces and torques of
+//!   (SSD/E or SPC/E water) through [`Rigid`], with the forces and torques of
 //!   `RigidPairPotential::evaluate` ([`Interaction`] is either kind);
 //! - [`System`]: bodies in a periodic box from a lattice, random orientations and
 //!   Maxwell–Boltzmann velocities ([`Setup`]), or from explicit state;

@@ -176,7 +176,7 @@ fn sum_pairs(
 }
 
 /// The smooth potentials of rigid bodies of any shape (`potential::RigidPairPotential`, each
-/// zero beyond its own cut-off, as SSD/E is), evaluated at the bodies' attitudes: the view
+/// zero beyond its own cut-off, as SSD/E and SPC/E are), evaluated at the bodies' attitudes: the view
 /// must carry them (`Simulation::sample_attitudes`), else every sum is NaN.
 #[derive(Clone, Debug)]
 pub struct RigidEstimator<P> {

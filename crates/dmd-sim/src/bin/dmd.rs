@@ -33,7 +33,7 @@ use indicatif::{ProgressBar, ProgressStyle};
                   an event a pair reaching a step of its potential exchanges momentum and \
                   energy exactly.\n\n\
                   It runs hard spheres, square-well and stepped spheres (mixtures too); rigid \
-                  rods, Gay-Berne ellipsoids and rigid tops such as SSD/E water, whose smooth \
+                  rods, Gay-Berne ellipsoids and rigid tops such as SSD/E or SPC/E water, whose smooth \
                   potential is mapped onto energy terraces; rigid site molecules; and \
                   semi-flexible molecules with bonds held by RATTLE. With --engine smd the \
                   same scene runs with standard (time-step) molecular dynamics on the smooth \
@@ -262,6 +262,7 @@ fn kind(model: &str) -> &str {
         "smd-lennard-jones" => "Lennard-Jones spheres",
         "smd-gay-berne" => "Gay-Berne ellipsoids, smooth potential",
         "smd-ssd-e" => "SSD/E water",
+        "smd-spc-e" => "SPC/E water",
         other => other,
     }
 }

@@ -6,7 +6,7 @@
 //! stepped path. Potentials that depend on orientations build a
 //! [`Terraced`](crate::models::terraced::Terraced) model through their
 //! kind (`config::kinds`), on the bodies of [`Bodies`]: uniaxial ones on rods ([`rods_model`]), ones that read
-//! whole attitudes (SSD/E water) on rigid tops ([`tops_model`]), with random orientations and
+//! whole attitudes (SSD/E or SPC/E water, biaxial ellipsoids) on rigid tops ([`tops_model`]), with random orientations and
 //! equipartitioned angular velocities. This module holds what the kinds share: terrace maps,
 //! search settings, starting rotations and the smooth estimators.
 
@@ -170,7 +170,7 @@ impl<P: PairPotential + Clone + std::fmt::Debug + Send + 'static> Bodies for P {
     }
 }
 
-/// Potentials that read whole attitudes (SSD/E water, biaxial ellipsoids) act between rigid
+/// Potentials that read whole attitudes (SSD/E and SPC/E water, biaxial ellipsoids) act between rigid
 /// tops.
 impl<P: RigidPairPotential + Clone + std::fmt::Debug + Send + 'static> Bodies for Rigid<P> {
     fn model(
@@ -699,7 +699,8 @@ fn cutoff_fits(
 }
 
 /// The estimator of a scene of rigid tops (in internal units): the terraced pairs' own smooth
-/// potentials, each zero beyond its own cut-off (the kind's `own_window`; 9 Å for SSD/E), or
+/// potentials, each zero beyond its own cut-off (the kind's `own_window`; 9 Å for SSD/E,
+/// 10.93 Å for SPC/E), or
 /// `None` when the scene does not want one (`output.smooth_estimators = false` or no
 /// `output.sample_interval`) or the cut-off does not fit the box (then an explicit
 /// `output.smooth_estimators = true` is an error).

@@ -368,7 +368,7 @@ pub struct SpeciesSpec {
     pub inertia: Option<f64>,
     /// Principal moments of inertia `[I_x, I_y, I_z]` about the body axes of a rigid body of
     /// any shape (an asymmetric top), for potentials that read each body's whole attitude
-    /// (`ssd-e`).
+    /// (`ssd-e`, `spc-e`, `biaxial-gay-berne`).
     pub moments: Option<[f64; 3]>,
     /// The shape of a hard body whose model reads its own keys: `kind` names the model, whose
     /// scene module checks the other keys of the table (module `config::plan`).
@@ -508,6 +508,9 @@ pub enum PotentialSpec {
     Stockmayer(StockmayerSpec),
     /// Biaxial Gay–Berne ellipsoids (Berardi, Fava and Zannoni) between rigid tops.
     BiaxialGayBerne(BiaxialGayBerneSpec),
+    /// SPC/E water: three sites, site–site Lennard-Jones and damped shifted force Coulomb,
+    /// between rigid tops; molecular units only.
+    SpcE(SpcESpec),
 }
 
 impl PotentialSpec {
@@ -520,6 +523,7 @@ impl PotentialSpec {
             PotentialSpec::SsdE(k) => k,
             PotentialSpec::Stockmayer(k) => k,
             PotentialSpec::BiaxialGayBerne(k) => k,
+            PotentialSpec::SpcE(k) => k,
         }
     }
 
@@ -532,6 +536,7 @@ impl PotentialSpec {
             PotentialSpec::SsdE(k) => k,
             PotentialSpec::Stockmayer(k) => k,
             PotentialSpec::BiaxialGayBerne(k) => k,
+            PotentialSpec::SpcE(k) => k,
         }
     }
 
@@ -664,6 +669,20 @@ fn nu() -> f64 {
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct SsdESpec {
+    /// Internal energy units per kJ/mol (set by `Scene::internal`, not a scene key).
+    #[serde(skip, default = "one")]
+    pub energy_unit: f64,
+}
+
+/// The keys of `kind = "spc-e"` (`config::kinds::spc_e`): the damped shifted force Coulomb
+/// term's damping and the site cut-off; bodies are rigid tops with `moments`.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SpcESpec {
+    /// Damping α of the Coulomb term (1/Å; default 0.2, Fennell and Gezelter 2006).
+    pub alpha: Option<f64>,
+    /// Site–site cut-off R_c of both terms (Å; default 9).
+    pub r_cut: Option<f64>,
     /// Internal energy units per kJ/mol (set by `Scene::internal`, not a scene key).
     #[serde(skip, default = "one")]
     pub energy_unit: f64,
@@ -1898,7 +1917,7 @@ impl Scene {
                     return Err(SceneError::invalid(
                         format!("species[{k}].moments"),
                         "only bodies of a potential that reads whole attitudes (`ssd-e`, \
-                         `biaxial-gay-berne`) have three moments: remove the key",
+                         `spc-e`, `biaxial-gay-berne`) have three moments: remove the key",
                     ));
                 }
                 (None, false) => {}

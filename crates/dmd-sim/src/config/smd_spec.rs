@@ -11,9 +11,9 @@ use crate::config::scene::{
 
 /// The default smoothing window: 003 Eq. 26's `r_l = 2.5σ`, `r_u = 3σ`, shifted outwards by
 /// the contact distance beyond σ (Gay–Berne's end-to-end κσ₀), so that the potential is cut
-/// where its tail is as small as the Lennard-Jones one at 2.5σ in every orientation. SSD/E
-/// switches itself off (zero beyond its cut-off, 9 Å): its window is its own switch, not
-/// smoothed again.
+/// where its tail is as small as the Lennard-Jones one at 2.5σ in every orientation. A kind
+/// that vanishes beyond a cut-off of its own (SSD/E's switch to 9 Å, SPC/E's site cut-off)
+/// gives its own window, and is not smoothed again.
 pub fn default_window(p: &PotentialSpec) -> (f64, f64) {
     if let Some(own) = p.describe().own_window() {
         return own;
@@ -227,8 +227,8 @@ pub fn window(scene: &Scene, pot: &PotentialSpec) -> (f64, f64) {
 /// optimum is flat about it) or what fits a small box.
 ///
 /// # Errors
-/// [`SceneError::Invalid`] naming `smd.smoothing.r_u` (`box` for SSD/E, whose cut-off is its
-/// own) or `smd.skin` if the list radius `r_u + skin` reaches half the shortest box side
+/// [`SceneError::Invalid`] naming `smd.smoothing.r_u` (`box` for a kind whose cut-off is its
+/// own, such as the water models) or `smd.skin` if the list radius `r_u + skin` reaches half the shortest box side
 /// (minimum image).
 pub fn list_skin(
     pot: &PotentialSpec,

@@ -8,8 +8,9 @@
 //! - the potential of `[[pair]]` (`rods`, `lennard-jones`, `gay-berne`) is smoothed to zero
 //!   between `r_l` and `r_u` (003 Eq. 26; default 2.5σ and 3σ, for Gay–Berne measured from
 //!   the end-to-end contact κσ₀) and integrated with the splitting of [`smd::Integrator`];
-//!   its terraces are not used; `ssd-e` water, which switches itself off at 9 Å, is
-//!   integrated as it is ([`smd::Rigid`]), the molecules rigid asymmetric tops;
+//!   its terraces are not used; a kind between rigid tops that vanishes beyond a cut-off of
+//!   its own (`ssd-e` water switched off at 9 Å, `spc-e` water whose site terms end at 9 Å,
+//!   `biaxial-gay-berne`) is integrated as it is ([`smd::Rigid`]), the bodies rigid tops;
 //! - the initial state is the event-driven engine's own (lattice or file, Maxwell–Boltzmann
 //!   velocities, orientations or attitudes and equipartitioned angular velocities from the
 //!   same seed);
@@ -62,7 +63,7 @@ use crate::models::rotor::TopInertia;
 pub struct SmdSummary {
     /// `smd`.
     pub engine: String,
-    /// Interaction model (`smd-rods`, `smd-lennard-jones`, `smd-gay-berne`, `smd-ssd-e`).
+    /// Interaction model (`smd-` and the kind: `smd-rods`, `smd-lennard-jones`, `smd-ssd-e`, …).
     pub model: String,
     /// `reduced` or `molecular`.
     pub units: String,
@@ -149,8 +150,9 @@ pub struct SmdSummary {
     pub steps_per_build: f64,
     /// The Verlet-list skin.
     pub skin: f64,
-    /// The smoothing window `[r_l, r_u]` (003 Eq. 26); for SSD/E its own switch, from where
-    /// it starts to the cut-off.
+    /// The smoothing window `[r_l, r_u]` (003 Eq. 26); for a kind with a cut-off of its own
+    /// (rigid tops) its own window, from where the cut-off starts to act to where the pair
+    /// energy ends.
     pub smoothing: [f64; 2],
     /// Self-diffusion coefficient from the MSD slope (when `output.msd` is on).
     pub diffusion_msd: Option<f64>,
@@ -360,8 +362,9 @@ fn go(
             .map(|(&q, &w)| q * (principal * (q.inverse() * w)))
             .collect();
         (
-            // The body frame is the principal frame SSD/E reads; its z (the dipole) is the
-            // axis the orientational correlations follow, as in the event-driven engine.
+            // The body frame is the principal frame the potential reads; its z (the water
+            // models' dipole) is the axis the orientational correlations follow, as in the
+            // event-driven engine.
             BodyModel::rigid(species.mass, principal.to_array(), DVec3::Z).map_err(smd_error)?,
             smd::Orientations::Rotations(poses.iter().map(|&q| DMat3::from_quat(q)).collect()),
             l,

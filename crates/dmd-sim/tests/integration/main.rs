@@ -30,3 +30,4 @@ mod tops;
 mod trajectory_tools;
 mod tune;
 mod water_smd;
+mod water_spce;

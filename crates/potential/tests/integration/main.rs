@@ -7,4 +7,5 @@ mod extremes;
 mod forces;
 mod gay_berne_reference;
 mod rigid_water;
+mod site_water;
 mod terraces;

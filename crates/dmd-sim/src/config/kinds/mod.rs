@@ -17,6 +17,7 @@ mod biaxial_gay_berne;
 mod gay_berne;
 mod lennard_jones;
 mod lj_rods;
+mod spc_e;
 mod ssd_e;
 mod stockmayer;
 
@@ -41,6 +42,7 @@ impl PotentialSpec {
             PotentialSpec::SsdE(k) => v.visit(k),
             PotentialSpec::Stockmayer(k) => v.visit(k),
             PotentialSpec::BiaxialGayBerne(k) => v.visit(k),
+            PotentialSpec::SpcE(k) => v.visit(k),
         }
     }
 }
