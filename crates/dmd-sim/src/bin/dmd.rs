@@ -32,10 +32,11 @@ use indicatif::{ProgressBar, ProgressStyle};
     long_about = "Event-driven molecular dynamics: bodies move freely between events, and at \
                   an event a pair reaching a step of its potential exchanges momentum and \
                   energy exactly.\n\n\
-                  It runs hard spheres, square-well and stepped spheres (mixtures too); rigid \
-                  rods, Gay-Berne ellipsoids and rigid tops such as SSD/E or SPC/E water, whose smooth \
-                  potential is mapped onto energy terraces; rigid site molecules; and \
-                  semi-flexible molecules with bonds held by RATTLE. With --engine smd the \
+                  It runs hard spheres, square-well and stepped spheres (mixtures too); hard \
+                  spherocylinders; rigid rods, Gay-Berne ellipsoids and rigid tops such as SSD/E \
+                  water and SPC/E water, whose smooth potential is mapped onto energy terraces; \
+                  rigid site molecules; and semi-flexible molecules with bonds held by RATTLE, \
+                  their own atoms interacting if asked. With --engine smd the \
                   same scene runs with standard (time-step) molecular dynamics on the smooth \
                   potential.\n\n\
                   A scene is a TOML file; docs/USER-GUIDE.md describes every key, the units \

@@ -122,6 +122,221 @@ fn finite_positive(what: &'static str, x: f64) -> Result<(), (&'static str, f64)
 }
 
 /// A rod: the inertia is its moment `I₁ = I₂` about axes perpendicular to its own.
+/// One body's free rotation since its last change at time `t` (its anchor).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Anchored<R> {
+    /// The rotation from the anchor.
+    pub rotor: R,
+    /// The anchor's time on the loop's clock.
+    pub t: f64,
+}
+
+impl<R: Rotor> Anchored<R> {
+    /// The pose at `now`.
+    #[inline(always)]
+    pub fn pose(&self, now: f64) -> R::Pose {
+        self.rotor.pose(now - self.t)
+    }
+
+    /// The pose and lab angular velocity at `now`.
+    #[inline(always)]
+    pub fn pose_omega(&self, now: f64) -> (R::Pose, DVec3) {
+        self.rotor.pose_omega(now - self.t)
+    }
+}
+
+/// The free rotations of every body of a model of rigid bodies, each anchored at its last
+/// change, with the inertia of each body's species: what such a model does with them at the
+/// loop's hooks (re-basing, kinetic energy, the thermostat, HMC's draw, reversal and scaling,
+/// checkpoints), written once for every model and every [`Rotor`].
+#[derive(Clone, Debug)]
+pub struct Rotations<R: Rotor> {
+    /// Each body's rotation.
+    pub bodies: Vec<Anchored<R>>,
+    /// Each body's species.
+    species: Vec<u32>,
+    /// Each species' inertia.
+    inertia: Vec<R::Inertia>,
+}
+
+impl<R: Rotor> Rotations<R> {
+    /// The rotations `bodies` of bodies of species `species` (indexing `inertia`).
+    pub fn new(bodies: Vec<Anchored<R>>, species: &[u32], inertia: Vec<R::Inertia>) -> Self {
+        assert_eq!(bodies.len(), species.len(), "one species per body");
+        Rotations {
+            bodies,
+            species: species.to_vec(),
+            inertia,
+        }
+    }
+
+    /// The inertia of body `i`.
+    #[inline(always)]
+    pub fn inertia_of(&self, i: u32) -> &R::Inertia {
+        &self.inertia[self.species[i as usize] as usize]
+    }
+
+    /// Body `i` rotates from `pose` with lab angular velocity `omega` from `now` on.
+    ///
+    /// # Errors
+    /// A pose or angular velocity that is not finite.
+    pub fn restart(&mut self, i: u32, pose: R::Pose, omega: DVec3, now: f64) -> Result<(), String> {
+        let rotor = R::start(self.inertia_of(i), pose, omega)?;
+        self.bodies[i as usize] = Anchored { rotor, t: now };
+        Ok(())
+    }
+
+    /// Re-anchors every rotation at the new time origin `t0` (rotation angles stay small).
+    pub fn rebase(&mut self, t0: f64) {
+        for (r, &s) in self.bodies.iter_mut().zip(&self.species) {
+            let (pose, omega) = r.pose_omega(t0);
+            if let Ok(rotor) = R::start(&self.inertia[s as usize], pose, omega) {
+                *r = Anchored { rotor, t: 0.0 };
+            } else {
+                // Not finite (a broken invariant, reported elsewhere): keep the old anchor.
+                r.t -= t0;
+            }
+        }
+    }
+
+    /// Rotational kinetic energy of all bodies.
+    pub fn kinetic(&self) -> f64 {
+        let mut k = crate::engine::sum::Compensated::ZERO;
+        for (r, &s) in self.bodies.iter().zip(&self.species) {
+            k.add(r.rotor.kinetic(&self.inertia[s as usize]));
+        }
+        k.value()
+    }
+
+    /// Rotational degrees of freedom of all bodies.
+    pub fn dof(&self) -> f64 {
+        R::DOF * self.bodies.len() as f64
+    }
+
+    /// An Andersen collision of body `i` at `now`: a fresh angular velocity at `kt`; returns
+    /// the change of kinetic energy (0 if it could not be drawn).
+    pub fn thermalize(&mut self, i: u32, now: f64, kt: f64, rng: &mut Xoshiro256PlusPlus) -> f64 {
+        let inertia = *self.inertia_of(i);
+        let r = self.bodies[i as usize];
+        let pose = r.pose(now);
+        let w = R::draw(&inertia, pose, kt, rng);
+        let Ok(rotor) = R::start(&inertia, pose, w) else {
+            return 0.0;
+        };
+        let dk = rotor.kinetic(&inertia) - r.rotor.kinetic(&inertia);
+        self.bodies[i as usize] = Anchored { rotor, t: now };
+        dk
+    }
+
+    /// Angular momentum of body `i`.
+    #[inline]
+    pub fn spin(&self, i: u32) -> DVec3 {
+        self.bodies[i as usize].rotor.momentum(self.inertia_of(i))
+    }
+
+    /// Lab angular velocity of body `i`.
+    #[inline]
+    pub fn omega(&self, i: u32) -> DVec3 {
+        self.bodies[i as usize].rotor.omega()
+    }
+
+    /// Body `i`'s axis at `now` ([`Rotor::axis`]).
+    #[inline]
+    pub fn axis(&self, i: u32, now: f64) -> DVec3 {
+        R::axis(&self.bodies[i as usize].pose(now))
+    }
+
+    /// Body `i`'s attitude at `now` ([`Rotor::attitude`]).
+    #[inline]
+    pub fn attitude(&self, i: u32, now: f64) -> DQuat {
+        R::attitude(&self.bodies[i as usize].pose(now))
+    }
+
+    /// Fresh angular velocities for every body at `now`, drawn at `kt` (HMC's refresh).
+    pub fn draw(&mut self, now: f64, kt: f64, rng: &mut Xoshiro256PlusPlus) {
+        for (r, &s) in self.bodies.iter_mut().zip(&self.species) {
+            let inertia = &self.inertia[s as usize];
+            let pose = r.pose(now);
+            let w = R::draw(inertia, pose, kt, rng);
+            if let Ok(rotor) = R::start(inertia, pose, w) {
+                *r = Anchored { rotor, t: now };
+            }
+        }
+    }
+
+    /// Reverses every rotation at time 0 (HMC reverses at a re-basing, where every body is
+    /// anchored: there the reversal is exact, the body turns back the way it came).
+    pub fn reverse(&mut self) {
+        for (r, &s) in self.bodies.iter_mut().zip(&self.species) {
+            let inertia = &self.inertia[s as usize];
+            let reversed = if r.t == 0.0 {
+                r.rotor.reversed(inertia)
+            } else {
+                let (pose, omega) = r.pose_omega(0.0);
+                R::start(inertia, pose, -omega)
+            };
+            if let Ok(rotor) = reversed {
+                *r = Anchored { rotor, t: 0.0 };
+            }
+        }
+    }
+
+    /// Scales every angular velocity by `factor` at `now`: each rotation restarts from its
+    /// present pose (a linear rotor's ω stays perpendicular to its axis, a top's keeps its
+    /// direction in the body, so the energy is exactly factor² times the old one up to
+    /// round-off).
+    pub fn scale(&mut self, now: f64, factor: f64) {
+        for (r, &s) in self.bodies.iter_mut().zip(&self.species) {
+            let (pose, omega) = r.pose_omega(now);
+            if let Ok(rotor) = R::start(&self.inertia[s as usize], pose, factor * omega) {
+                *r = Anchored { rotor, t: now };
+            }
+        }
+    }
+
+    /// Numbers of the rotations in a saved state.
+    pub fn numbers(&self) -> usize {
+        (R::PARTS + 1) * self.bodies.len()
+    }
+
+    /// Appends every rotation and its anchor time to a saved state, bit for bit.
+    pub fn write(&self, x: &mut Vec<f64>) {
+        for r in &self.bodies {
+            r.rotor.write(x);
+            x.push(r.t);
+        }
+    }
+
+    /// Reads what [`write`](Self::write) wrote (exactly [`numbers`](Self::numbers) of
+    /// them) and takes it.
+    ///
+    /// # Errors
+    /// A rotation or clock that does not fit the bodies.
+    pub fn read(&mut self, state: &[f64]) -> Result<(), String> {
+        let per_body = R::PARTS + 1;
+        if state.len() != self.numbers() {
+            return Err(format!(
+                "the rotations' state has {} numbers, {} bodies need {}",
+                state.len(),
+                self.bodies.len(),
+                self.numbers()
+            ));
+        }
+        let mut restored = Vec::with_capacity(self.bodies.len());
+        for ((i, x), &s) in state.chunks_exact(per_body).enumerate().zip(&self.species) {
+            let (parts, t) = x.split_at(R::PARTS);
+            let rotor = R::read(&self.inertia[s as usize], parts)
+                .map_err(|e| format!("body {i} cannot be restored: {e}"))?;
+            if !t[0].is_finite() {
+                return Err(format!("body {i} has a non-finite clock"));
+            }
+            restored.push(Anchored { rotor, t: t[0] });
+        }
+        self.bodies = restored;
+        Ok(())
+    }
+}
+
 impl Rotor for LinearRotor {
     type Inertia = f64;
     type Pose = DVec3;

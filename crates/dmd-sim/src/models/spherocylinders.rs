@@ -40,7 +40,8 @@ use crate::engine::event::{Boundary, Kind};
 use crate::engine::model::{
     Executed, OVERLAP_TOLERANCE, Pair, PairClass, PairModel, PairSetupError, Report,
 };
-use crate::models::rotor::Rotor;
+use crate::engine::saved::{StateReader, push_count};
+use crate::models::rotor::{Anchored, Rotations, Rotor};
 use crate::models::search::bracket;
 
 /// Samples of one prediction before it ends in a virtual event.
@@ -87,20 +88,6 @@ pub fn closest_points(r: DVec3, ui: DVec3, hi: f64, uj: DVec3, hj: f64) -> (f64,
     (s, t, r + s * ui - t * uj)
 }
 
-/// A body's rotation since its last change at time `t`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct Anchored {
-    rotor: LinearRotor,
-    t: f64,
-}
-
-impl Anchored {
-    #[inline(always)]
-    fn axis(&self, now: f64) -> DVec3 {
-        self.rotor.pose(now - self.t)
-    }
-}
-
 /// Counters of the model's predictions.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 struct Stats {
@@ -131,8 +118,7 @@ impl Stats {
 #[derive(Clone, Debug)]
 pub struct Spherocylinders {
     species: Vec<Spherocylinder>,
-    body_species: Vec<u32>,
-    rods: Vec<Anchored>,
+    rot: Rotations<LinearRotor>,
     reach: f64,
     stats: Stats,
 }
@@ -288,10 +274,10 @@ impl Spherocylinders {
                 reach = reach.max(0.5 * (a.length + b.length) + 0.5 * (a.diameter + b.diameter));
             }
         }
+        let inertia = species.iter().map(|s| s.inertia).collect();
         Ok(Spherocylinders {
             species,
-            body_species: body_species.to_vec(),
-            rods,
+            rot: Rotations::new(rods, body_species, inertia),
             reach,
             stats: Stats::default(),
         })
@@ -299,7 +285,7 @@ impl Spherocylinders {
 
     /// The unit axis of body `i` at `now`.
     pub fn axis_at(&self, i: u32, now: f64) -> DVec3 {
-        self.rods[i as usize].axis(now)
+        self.rot.bodies[i as usize].pose(now)
     }
 
     /// The contact distance and half-lengths of species `si`, `sj`.
@@ -323,7 +309,10 @@ impl Spherocylinders {
 
     fn flight(&self, pair: &Pair) -> Flight {
         let (core, hi, hj) = self.shape(pair.si, pair.sj);
-        let (ri, rj) = (self.rods[pair.i as usize], self.rods[pair.j as usize]);
+        let (ri, rj) = (
+            self.rot.bodies[pair.i as usize],
+            self.rot.bodies[pair.j as usize],
+        );
         Flight {
             dr: pair.dr,
             dv: pair.dv,
@@ -449,8 +438,8 @@ impl PairModel for Spherocylinders {
         } = *pair;
         debug_assert_eq!(boundary, Boundary::Inner);
         let (core, hi, hj) = self.shape(si, sj);
-        let (ri, rj) = (self.rods[i as usize], self.rods[j as usize]);
-        let (ui, uj) = (ri.axis(now), rj.axis(now));
+        let (ri, rj) = (self.rot.bodies[i as usize], self.rot.bodies[j as usize]);
+        let (ui, uj) = (ri.pose(now), rj.pose(now));
         let (wi, wj) = (Rotor::omega(&ri.rotor), Rotor::omega(&rj.rotor));
         let (s, t, w) = closest_points(dr, ui, hi, uj, hj);
         let d = w.length();
@@ -479,13 +468,13 @@ impl PairModel for Spherocylinders {
             &Contact::new(n, arm_i, arm_j),
             f64::INFINITY,
         )?;
-        let start = |inertia: &f64, u, w| {
-            LinearRotor::start(inertia, u, w)
-                .map(|rotor| Anchored { rotor, t: now })
-                .map_err(|_| CollideError::NotFinite("angular velocity after the impulse"))
-        };
-        self.rods[i as usize] = start(&a.inertia, ui, out.i.angular)?;
-        self.rods[j as usize] = start(&b.inertia, uj, out.j.angular)?;
+        let unusable = |_| CollideError::NotFinite("angular velocity after the impulse");
+        self.rot
+            .restart(i, ui, out.i.angular, now)
+            .map_err(unusable)?;
+        self.rot
+            .restart(j, uj, out.j.angular, now)
+            .map_err(unusable)?;
         *vi = out.i.linear;
         *vj = out.j.linear;
         Ok(Executed {
@@ -544,56 +533,34 @@ impl PairModel for Spherocylinders {
     }
 
     fn rebase(&mut self, t0: f64) {
-        // Every rotation re-anchored at the new origin, so that rotation angles stay small.
-        for (r, &s) in self.rods.iter_mut().zip(&self.body_species) {
-            let (u, w) = r.rotor.pose_omega(t0 - r.t);
-            match LinearRotor::start(&self.species[s as usize].inertia, u, w) {
-                Ok(rotor) => *r = Anchored { rotor, t: 0.0 },
-                Err(_) => r.t -= t0,
-            }
-        }
+        self.rot.rebase(t0);
     }
 
     fn rotational_kinetic(&self) -> f64 {
-        let mut k = crate::engine::sum::Compensated::ZERO;
-        for (r, &s) in self.rods.iter().zip(&self.body_species) {
-            k.add(r.rotor.kinetic(&self.species[s as usize].inertia));
-        }
-        k.value()
+        self.rot.kinetic()
     }
 
     fn rotational_dof(&self) -> f64 {
-        LinearRotor::DOF * self.rods.len() as f64
+        self.rot.dof()
     }
 
     fn thermalize(
         &mut self,
         i: u32,
-        s: u32,
+        _s: u32,
         now: f64,
         kt: f64,
         rng: &mut Xoshiro256PlusPlus,
     ) -> f64 {
-        let inertia = &self.species[s as usize].inertia;
-        let r = self.rods[i as usize];
-        let u = r.axis(now);
-        let w = LinearRotor::draw(inertia, u, kt, rng);
-        let Ok(rotor) = LinearRotor::start(inertia, u, w) else {
-            return 0.0;
-        };
-        let dk = rotor.kinetic(inertia) - r.rotor.kinetic(inertia);
-        self.rods[i as usize] = Anchored { rotor, t: now };
-        dk
+        self.rot.thermalize(i, now, kt, rng)
     }
 
-    fn spin(&self, i: u32, s: u32) -> DVec3 {
-        self.rods[i as usize]
-            .rotor
-            .momentum(&self.species[s as usize].inertia)
+    fn spin(&self, i: u32, _s: u32) -> DVec3 {
+        self.rot.spin(i)
     }
 
     fn omega(&self, i: u32) -> DVec3 {
-        Rotor::omega(&self.rods[i as usize].rotor)
+        self.rot.omega(i)
     }
 
     fn axis(&self, i: u32, now: f64) -> Option<DVec3> {
@@ -616,92 +583,35 @@ impl PairModel for Spherocylinders {
     }
 
     fn draw_rotations(&mut self, now: f64, temperature: f64, rng: &mut Xoshiro256PlusPlus) {
-        for (r, &s) in self.rods.iter_mut().zip(&self.body_species) {
-            let inertia = &self.species[s as usize].inertia;
-            let u = r.axis(now);
-            let w = LinearRotor::draw(inertia, u, temperature, rng);
-            if let Ok(rotor) = LinearRotor::start(inertia, u, w) {
-                *r = Anchored { rotor, t: now };
-            }
-        }
+        self.rot.draw(now, temperature, rng);
     }
 
     fn reverse_rotations(&mut self) {
-        // At a re-basing (present time 0) every body is anchored there, and the reversal is
-        // exact: the body turns back the way it came.
-        for (r, &s) in self.rods.iter_mut().zip(&self.body_species) {
-            let inertia = &self.species[s as usize].inertia;
-            let reversed = if r.t == 0.0 {
-                Rotor::reversed(&r.rotor, inertia)
-            } else {
-                let (u, w) = r.rotor.pose_omega(-r.t);
-                LinearRotor::start(inertia, u, -w)
-            };
-            if let Ok(rotor) = reversed {
-                *r = Anchored { rotor, t: 0.0 };
-            }
-        }
+        self.rot.reverse();
     }
 
     fn scale_rotations(&mut self, now: f64, factor: f64) {
-        for (r, &s) in self.rods.iter_mut().zip(&self.body_species) {
-            let (u, w) = r.rotor.pose_omega(now - r.t);
-            if let Ok(rotor) = LinearRotor::start(&self.species[s as usize].inertia, u, factor * w)
-            {
-                *r = Anchored { rotor, t: now };
-            }
-        }
+        self.rot.scale(now, factor);
     }
 
     fn extra_state(&self) -> Vec<f64> {
-        let per_body = LinearRotor::PARTS + 1;
-        let mut x = Vec::with_capacity(per_body * self.rods.len() + 2 * Stats::NUMBERS);
-        for r in &self.rods {
-            r.rotor.write(&mut x);
-            x.push(r.t);
-        }
+        let mut x = Vec::with_capacity(self.rot.numbers() + 2 * Stats::NUMBERS);
+        self.rot.write(&mut x);
         for c in self.stats.counts() {
-            // Each counter as two exact 32-bit halves.
-            x.push((c >> 32) as f64);
-            x.push((c & 0xffff_ffff) as f64);
+            push_count(&mut x, c);
         }
         x
     }
 
     fn set_extra_state(&mut self, state: &[f64]) -> Result<(), String> {
-        let n = self.rods.len();
-        let per_body = LinearRotor::PARTS + 1;
-        let want = per_body * n + 2 * Stats::NUMBERS;
-        if state.len() != want {
-            return Err(format!(
-                "the bodies' state has {} numbers, {n} spherocylinders need {want}",
-                state.len()
-            ));
-        }
-        let (rods, counts) = state.split_at(per_body * n);
-        let mut restored = Vec::with_capacity(n);
-        for ((i, x), &s) in rods
-            .chunks_exact(per_body)
-            .enumerate()
-            .zip(&self.body_species)
-        {
-            let (parts, t) = x.split_at(LinearRotor::PARTS);
-            let rotor = LinearRotor::read(&self.species[s as usize].inertia, parts)
-                .map_err(|e| format!("body {i} cannot be restored: {e}"))?;
-            if !t[0].is_finite() {
-                return Err(format!("body {i} has a non-finite clock"));
-            }
-            restored.push(Anchored { rotor, t: t[0] });
-        }
+        let mut r = StateReader::new(state);
+        let rotations = r.take(self.rot.numbers(), "the bodies' rotations")?;
         let mut c = [0u64; Stats::NUMBERS];
-        for (k, h) in counts.chunks_exact(2).enumerate() {
-            let ok = |v: f64| (0.0..4_294_967_296.0).contains(&v) && v.fract() == 0.0;
-            if !(ok(h[0]) && ok(h[1])) {
-                return Err(format!("counter {k} is not a count"));
-            }
-            c[k] = (h[0] as u64) << 32 | h[1] as u64;
+        for x in &mut c {
+            *x = r.count("a counter")?;
         }
-        self.rods = restored;
+        r.finish()?;
+        self.rot.read(rotations)?;
         self.stats = Stats {
             predictions: c[0],
             samples: c[1],

@@ -59,27 +59,9 @@ use crate::engine::event::{Boundary, Kind};
 use crate::engine::hash::mix;
 use crate::engine::model::{Executed, Pair, PairClass, PairModel, PairSetupError, Report};
 use crate::engine::pair_state::{PairStates, SavedSearches};
-use crate::models::rotor::{Rotor, Top};
+use crate::engine::saved::{StateReader, push_count};
+use crate::models::rotor::{Anchored, Rotations, Rotor, Top};
 use crate::models::search::{SearchMethod, SearchSettings, SearchStats, bracket, jitter_factor};
-
-/// One body's free rotation since its last change at time `t`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct Anchored<R> {
-    rotor: R,
-    t: f64,
-}
-
-impl<R: Rotor> Anchored<R> {
-    #[inline(always)]
-    fn pose(&self, now: f64) -> R::Pose {
-        self.rotor.pose(now - self.t)
-    }
-
-    #[inline(always)]
-    fn pose_omega(&self, now: f64) -> (R::Pose, DVec3) {
-        self.rotor.pose_omega(now - self.t)
-    }
-}
 
 /// A smooth pair potential as the terraced model reads it: energy, force and torques for two
 /// bodies' poses, its minimum and reaches, and optionally a certified Taylor model along the
@@ -564,8 +546,7 @@ pub struct Terraced<P: TerracedPotential> {
     table: Vec<u32>,
     pairs: Vec<PairTerraces<P>>,
     species: Vec<SpeciesOf<P>>,
-    body_species: Vec<u32>,
-    rods: Vec<Anchored<P::Rotor>>,
+    rot: Rotations<P::Rotor>,
     states: PairStates,
     pending: SavedSearches<Pending>,
     settings: SearchSettings,
@@ -694,13 +675,13 @@ impl<P: TerracedPotential> Terraced<P> {
             .transpose()
             .map_err(ModelError::Search)?;
         let n = rods.len();
+        let inertia = species.iter().map(|s| s.inertia).collect();
         Ok(Terraced {
             n_species: ns,
             table,
             pairs: tables,
             species,
-            body_species: body_species.to_vec(),
-            rods,
+            rot: Rotations::new(rods, body_species, inertia),
             states: PairStates::new(n),
             pending: SavedSearches::new(n),
             settings,
@@ -738,8 +719,8 @@ impl<P: TerracedPotential> Terraced<P> {
     /// `U` of pair `(i, j)` at `now` and separation `dr` (tests and checks).
     pub fn energy(&self, i: u32, j: u32, si: u32, sj: u32, now: f64, dr: DVec3) -> f64 {
         let (a, b) = (
-            self.rods[i as usize].pose(now),
-            self.rods[j as usize].pose(now),
+            self.rot.bodies[i as usize].pose(now),
+            self.rot.bodies[j as usize].pose(now),
         );
         self.pair(si, sj).potential.energy(dr, &a, &b)
     }
@@ -760,7 +741,7 @@ impl<P: TerracedPotential> Terraced<P> {
     ) -> Option<(f64, Kind)> {
         let pt = &self.pairs[self.table[si as usize * self.n_species + sj as usize] as usize];
         let band = pt.bands[k as usize];
-        let (ri, rj) = (&self.rods[i as usize], &self.rods[j as usize]);
+        let (ri, rj) = (&self.rot.bodies[i as usize], &self.rot.bodies[j as usize]);
         let pot = &pt.potential;
         let clamp = pt.clamp;
         // U and U̇ (003 Eq. 12) at time t, U clamped deep inside the core.
@@ -976,7 +957,7 @@ impl<P: TerracedPotential> PairModel for Terraced<P> {
         let Pair {
             i, j, si, sj, dr, ..
         } = *pair;
-        let t = self.rods[i as usize].t;
+        let t = self.rot.bodies[i as usize].t;
         let u = self.energy(i, j, si, sj, t, dr);
         let pt = self.pair(si, sj);
         let k = pt
@@ -1076,7 +1057,7 @@ impl<P: TerracedPotential> PairModel for Terraced<P> {
         let v = self.states.get(i, j);
         let k = pt.terrace(v);
         let band = pt.bands[k as usize];
-        let (ri, rj) = (self.rods[i as usize], self.rods[j as usize]);
+        let (ri, rj) = (self.rot.bodies[i as usize], self.rot.bodies[j as usize]);
         let ((ai, wi), (aj, wj)) = (ri.pose_omega(now), rj.pose_omega(now));
         let skipped = |overlap| Executed {
             class: PairClass::Skipped,
@@ -1118,13 +1099,13 @@ impl<P: TerracedPotential> PairModel for Terraced<P> {
         )?;
         *vi = out.i.linear;
         *vj = out.j.linear;
-        let rod = |inertia, pose, omega| -> Result<Anchored<P::Rotor>, collide::CollideError> {
-            P::Rotor::start(inertia, pose, omega)
-                .map(|rotor| Anchored { rotor, t: now })
-                .map_err(|_| collide::CollideError::NotFinite("angular velocity after the impulse"))
-        };
-        self.rods[i as usize] = rod(&spi.inertia, ai, out.i.angular)?;
-        self.rods[j as usize] = rod(&spj.inertia, aj, out.j.angular)?;
+        let unusable = |_| collide::CollideError::NotFinite("angular velocity after the impulse");
+        self.rot
+            .restart(i, ai, out.i.angular, now)
+            .map_err(unusable)?;
+        self.rot
+            .restart(j, aj, out.j.angular, now)
+            .map_err(unusable)?;
         let class = match (out.impulse.outcome, boundary) {
             (Outcome::Reflected, Boundary::Inner) if step == f64::INFINITY => PairClass::Core,
             (Outcome::Reflected, _) => PairClass::StepReflect,
@@ -1202,73 +1183,49 @@ impl<P: TerracedPotential> PairModel for Terraced<P> {
     }
 
     fn rebase(&mut self, t0: f64) {
-        // Re-anchor every rotation at the new origin, so that rotation angles stay small.
-        for (r, &s) in self.rods.iter_mut().zip(&self.body_species) {
-            let (pose, omega) = r.pose_omega(t0);
-            if let Ok(rotor) = P::Rotor::start(&self.species[s as usize].inertia, pose, omega) {
-                *r = Anchored { rotor, t: 0.0 };
-            } else {
-                // Not finite (a broken invariant, reported elsewhere): keep the old anchor.
-                r.t -= t0;
-            }
-        }
+        self.rot.rebase(t0);
     }
 
     fn rotational_kinetic(&self) -> f64 {
-        let mut k = crate::engine::sum::Compensated::ZERO;
-        for (r, s) in self.rods.iter().zip(self.body_species()) {
-            k.add(r.rotor.kinetic(&self.species[s as usize].inertia));
-        }
-        k.value()
+        self.rot.kinetic()
     }
 
     fn rotational_dof(&self) -> f64 {
-        P::Rotor::DOF * self.rods.len() as f64
+        self.rot.dof()
     }
 
     fn thermalize(
         &mut self,
         i: u32,
-        s: u32,
+        _s: u32,
         now: f64,
         kt: f64,
         rng: &mut Xoshiro256PlusPlus,
     ) -> f64 {
-        let inertia = &self.species[s as usize].inertia;
-        let r = self.rods[i as usize];
-        let pose = r.pose(now);
-        let w = P::Rotor::draw(inertia, pose, kt, rng);
-        let Ok(rotor) = P::Rotor::start(inertia, pose, w) else {
-            return 0.0;
-        };
-        let dk = rotor.kinetic(inertia) - r.rotor.kinetic(inertia);
-        self.rods[i as usize] = Anchored { rotor, t: now };
-        dk
+        self.rot.thermalize(i, now, kt, rng)
     }
 
     #[inline]
-    fn spin(&self, i: u32, s: u32) -> DVec3 {
-        self.rods[i as usize]
-            .rotor
-            .momentum(&self.species[s as usize].inertia)
+    fn spin(&self, i: u32, _s: u32) -> DVec3 {
+        self.rot.spin(i)
     }
 
     #[inline]
     fn omega(&self, i: u32) -> DVec3 {
-        self.rods[i as usize].rotor.omega()
+        self.rot.omega(i)
     }
 
     /// A rod's axis; a top's body `ẑ` (the dipole of the water models).
     #[inline]
     fn axis(&self, i: u32, now: f64) -> Option<DVec3> {
-        Some(P::Rotor::axis(&self.rods[i as usize].pose(now)))
+        Some(self.rot.axis(i, now))
     }
 
     /// A rod is a linear rotor: its body frame has z along the axis and no spin about it, so
     /// its attitude is the shortest rotation taking the body z axis onto its axis. A top's
     /// body frame is its principal frame.
     fn attitude(&self, i: u32, now: f64) -> Option<DQuat> {
-        Some(P::Rotor::attitude(&self.rods[i as usize].pose(now)))
+        Some(self.rot.attitude(i, now))
     }
 
     fn report(&self) -> Report {
@@ -1334,111 +1291,42 @@ impl<P: TerracedPotential> PairModel for Terraced<P> {
     }
 
     fn draw_rotations(&mut self, now: f64, temperature: f64, rng: &mut Xoshiro256PlusPlus) {
-        for (r, &s) in self.rods.iter_mut().zip(&self.body_species) {
-            let inertia = &self.species[s as usize].inertia;
-            let pose = r.pose(now);
-            let w = P::Rotor::draw(inertia, pose, temperature, rng);
-            if let Ok(rotor) = P::Rotor::start(inertia, pose, w) {
-                *r = Anchored { rotor, t: now };
-            }
-        }
+        self.rot.draw(now, temperature, rng);
     }
 
     fn reverse_rotations(&mut self) {
-        // HMC reverses at a re-basing (present time 0), where every body is anchored: there the
-        // reversal is exact, the body turns back the way it came.
-        for (r, &s) in self.rods.iter_mut().zip(&self.body_species) {
-            let inertia = &self.species[s as usize].inertia;
-            let reversed = if r.t == 0.0 {
-                r.rotor.reversed(inertia)
-            } else {
-                let (pose, omega) = r.pose_omega(0.0);
-                P::Rotor::start(inertia, pose, -omega)
-            };
-            if let Ok(rotor) = reversed {
-                *r = Anchored { rotor, t: 0.0 };
-            }
-        }
+        self.rot.reverse();
     }
 
     fn extra_state(&self) -> Vec<f64> {
-        let per_body = P::Rotor::PARTS + 1;
-        let mut x = Vec::with_capacity(per_body * self.rods.len() + STATS_NUMBERS);
-        for r in &self.rods {
-            r.rotor.write(&mut x);
-            x.push(r.t);
-        }
+        let mut x = Vec::with_capacity(self.rot.numbers() + STATS_NUMBERS);
+        self.rot.write(&mut x);
         for c in self.stats.counts() {
-            // Each counter as two exact 32-bit halves.
-            x.push((c >> 32) as f64);
-            x.push((c & 0xffff_ffff) as f64);
+            push_count(&mut x, c);
         }
         x
     }
 
     fn set_extra_state(&mut self, state: &[f64]) -> Result<(), String> {
-        let n = self.rods.len();
-        let per_body = P::Rotor::PARTS + 1;
-        if state.len() != per_body * n + STATS_NUMBERS {
-            return Err(format!(
-                "the bodies' state has {} numbers, {n} bodies need {}",
-                state.len(),
-                per_body * n + STATS_NUMBERS
-            ));
-        }
-        let (rods, counts) = state.split_at(per_body * n);
-        let mut restored = Vec::with_capacity(n);
-        for ((i, x), &s) in rods
-            .chunks_exact(per_body)
-            .enumerate()
-            .zip(&self.body_species)
-        {
-            let (parts, t) = x.split_at(P::Rotor::PARTS);
-            let rotor = P::Rotor::read(&self.species[s as usize].inertia, parts)
-                .map_err(|e| format!("body {i} cannot be restored: {e}"))?;
-            if !t[0].is_finite() {
-                return Err(format!("body {i} has a non-finite clock"));
-            }
-            restored.push(Anchored { rotor, t: t[0] });
-        }
+        let mut r = StateReader::new(state);
+        let rotations = r.take(self.rot.numbers(), "the bodies' rotations")?;
         let mut c = [0u64; STATS_NUMBERS / 2];
-        for (k, h) in counts.chunks_exact(2).enumerate() {
-            let ok = |v: f64| (0.0..4_294_967_296.0).contains(&v) && v.fract() == 0.0;
-            if !(ok(h[0]) && ok(h[1])) {
-                return Err(format!("search counter {k} is not a count"));
-            }
-            c[k] = (h[0] as u64) << 32 | h[1] as u64;
+        for x in &mut c {
+            *x = r.count("a search counter")?;
         }
-        self.rods = restored;
+        r.finish()?;
+        self.rot.read(rotations)?;
         self.stats = SearchStats::from_counts(c);
         Ok(())
     }
 
     fn scale_rotations(&mut self, now: f64, factor: f64) {
-        // Each rotation restarts at `now` from its present pose with the scaled angular
-        // velocity (a linear rotor's ω stays perpendicular to its axis, a top's keeps its
-        // direction in the body, so the energy is exactly factor² times the old one up to
-        // round-off).
-        for (r, &s) in self.rods.iter_mut().zip(&self.body_species) {
-            let (pose, omega) = r.pose_omega(now);
-            if let Ok(rotor) =
-                P::Rotor::start(&self.species[s as usize].inertia, pose, factor * omega)
-            {
-                *r = Anchored { rotor, t: now };
-            }
-        }
+        self.rot.scale(now, factor);
     }
 }
 
 /// Numbers of the search counters in [`PairModel::extra_state`] (two per counter).
 const STATS_NUMBERS: usize = 24;
-
-impl<P: TerracedPotential> Terraced<P> {
-    /// Species of every body.
-    fn body_species(&self) -> impl Iterator<Item = u32> + '_ {
-        self.body_species.iter().copied()
-    }
-}
 
 /// A lab angular velocity for a rod with axis `axis` drawn from equipartition at `kt`: each of
 /// the two components perpendicular to the axis Gaussian with variance `kT / I`.

@@ -227,6 +227,8 @@ fn the_help_speaks_the_users_words() {
         "hard spheres",
         "rods",
         "SSD/E water",
+        "SPC/E water",
+        "spherocylinders",
         "site molecules",
         "semi-flexible molecules",
         "--engine smd",
