@@ -1,5 +1,6 @@
-//! The rotation of a terraced rigid body between events: what the event loop's straight lines
-//! leave out of a body's state, behind one trait.
+//! The rotation of a rigid body between events: what the event loop's straight lines leave
+//! out of a body's state, behind one trait, and [`Rotations`], every body's rotation as a
+//! model of rigid bodies keeps it.
 //!
 //! A [`Rotor`] is the exact free rotation of one body from the moment of its last change (its
 //! *anchor*): its pose and lab angular velocity at any later time, its kinetic energy and
