@@ -338,6 +338,76 @@ impl<R: Rotor> Rotations<R> {
     }
 }
 
+/// The loop's rotation hooks of [`PairModel`](crate::engine::model::PairModel) for a model
+/// of rigid bodies whose rotations are its [`Rotations`] field `$rot`: re-basing, kinetic
+/// energy and degrees of freedom, the thermostat, angular momentum and velocity, axis and
+/// attitude (a rod's body frame has z along its axis and no spin about it; a top's is its
+/// principal frame), and HMC's draw, reversal and scaling. Used inside the model's `impl
+/// PairModel`.
+macro_rules! rotation_hooks {
+    ($rot:ident) => {
+        fn rebase(&mut self, t0: f64) {
+            self.$rot.rebase(t0);
+        }
+
+        fn rotational_kinetic(&self) -> f64 {
+            self.$rot.kinetic()
+        }
+
+        fn rotational_dof(&self) -> f64 {
+            self.$rot.dof()
+        }
+
+        fn thermalize(
+            &mut self,
+            i: u32,
+            _s: u32,
+            now: f64,
+            kt: f64,
+            rng: &mut rand_xoshiro::Xoshiro256PlusPlus,
+        ) -> f64 {
+            self.$rot.thermalize(i, now, kt, rng)
+        }
+
+        #[inline]
+        fn spin(&self, i: u32, _s: u32) -> glam::DVec3 {
+            self.$rot.spin(i)
+        }
+
+        #[inline]
+        fn omega(&self, i: u32) -> glam::DVec3 {
+            self.$rot.omega(i)
+        }
+
+        #[inline]
+        fn axis(&self, i: u32, now: f64) -> Option<glam::DVec3> {
+            Some(self.$rot.axis(i, now))
+        }
+
+        fn attitude(&self, i: u32, now: f64) -> Option<glam::DQuat> {
+            Some(self.$rot.attitude(i, now))
+        }
+
+        fn draw_rotations(
+            &mut self,
+            now: f64,
+            temperature: f64,
+            rng: &mut rand_xoshiro::Xoshiro256PlusPlus,
+        ) {
+            self.$rot.draw(now, temperature, rng);
+        }
+
+        fn reverse_rotations(&mut self) {
+            self.$rot.reverse();
+        }
+
+        fn scale_rotations(&mut self, now: f64, factor: f64) {
+            self.$rot.scale(now, factor);
+        }
+    };
+}
+pub(crate) use rotation_hooks;
+
 impl Rotor for LinearRotor {
     type Inertia = f64;
     type Pose = DVec3;

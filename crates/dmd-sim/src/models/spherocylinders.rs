@@ -32,8 +32,7 @@
 //! energy, momentum and angular momentum are conserved to round-off.
 
 use collide::{CollideError, Contact, LinearBody, Velocity, contact};
-use glam::{DQuat, DVec3};
-use rand_xoshiro::Xoshiro256PlusPlus;
+use glam::DVec3;
 use rigid_free::LinearRotor;
 
 use crate::engine::event::{Boundary, Kind};
@@ -532,46 +531,7 @@ impl PairModel for Spherocylinders {
         }
     }
 
-    fn rebase(&mut self, t0: f64) {
-        self.rot.rebase(t0);
-    }
-
-    fn rotational_kinetic(&self) -> f64 {
-        self.rot.kinetic()
-    }
-
-    fn rotational_dof(&self) -> f64 {
-        self.rot.dof()
-    }
-
-    fn thermalize(
-        &mut self,
-        i: u32,
-        _s: u32,
-        now: f64,
-        kt: f64,
-        rng: &mut Xoshiro256PlusPlus,
-    ) -> f64 {
-        self.rot.thermalize(i, now, kt, rng)
-    }
-
-    fn spin(&self, i: u32, _s: u32) -> DVec3 {
-        self.rot.spin(i)
-    }
-
-    fn omega(&self, i: u32) -> DVec3 {
-        self.rot.omega(i)
-    }
-
-    fn axis(&self, i: u32, now: f64) -> Option<DVec3> {
-        Some(self.axis_at(i, now))
-    }
-
-    /// The body frame has z along the axis and no spin about it: the shortest rotation taking
-    /// the body z axis onto the axis.
-    fn attitude(&self, i: u32, now: f64) -> Option<DQuat> {
-        Some(LinearRotor::attitude(&self.axis_at(i, now)))
-    }
+    crate::models::rotor::rotation_hooks!(rot);
 
     fn report(&self) -> Report {
         let mut r = Report::default();
@@ -580,18 +540,6 @@ impl PairModel for Spherocylinders {
         r.count("spherocylinders.refinement_samples", self.stats.refinements);
         r.count("spherocylinders.virtual_events", self.stats.virtuals);
         r
-    }
-
-    fn draw_rotations(&mut self, now: f64, temperature: f64, rng: &mut Xoshiro256PlusPlus) {
-        self.rot.draw(now, temperature, rng);
-    }
-
-    fn reverse_rotations(&mut self) {
-        self.rot.reverse();
-    }
-
-    fn scale_rotations(&mut self, now: f64, factor: f64) {
-        self.rot.scale(now, factor);
     }
 
     fn extra_state(&self) -> Vec<f64> {
@@ -630,6 +578,7 @@ mod tests {
     use proptest::prelude::*;
     use rand::SeedableRng;
     use rand_distr::{Distribution, StandardNormal};
+    use rand_xoshiro::Xoshiro256PlusPlus;
 
     const ROD: Spherocylinder = Spherocylinder {
         length: 3.0,

@@ -1182,51 +1182,7 @@ impl<P: TerracedPotential> PairModel for Terraced<P> {
         self.pending.clear(i);
     }
 
-    fn rebase(&mut self, t0: f64) {
-        self.rot.rebase(t0);
-    }
-
-    fn rotational_kinetic(&self) -> f64 {
-        self.rot.kinetic()
-    }
-
-    fn rotational_dof(&self) -> f64 {
-        self.rot.dof()
-    }
-
-    fn thermalize(
-        &mut self,
-        i: u32,
-        _s: u32,
-        now: f64,
-        kt: f64,
-        rng: &mut Xoshiro256PlusPlus,
-    ) -> f64 {
-        self.rot.thermalize(i, now, kt, rng)
-    }
-
-    #[inline]
-    fn spin(&self, i: u32, _s: u32) -> DVec3 {
-        self.rot.spin(i)
-    }
-
-    #[inline]
-    fn omega(&self, i: u32) -> DVec3 {
-        self.rot.omega(i)
-    }
-
-    /// A rod's axis; a top's body `ẑ` (the dipole of the water models).
-    #[inline]
-    fn axis(&self, i: u32, now: f64) -> Option<DVec3> {
-        Some(self.rot.axis(i, now))
-    }
-
-    /// A rod is a linear rotor: its body frame has z along the axis and no spin about it, so
-    /// its attitude is the shortest rotation taking the body z axis onto its axis. A top's
-    /// body frame is its principal frame.
-    fn attitude(&self, i: u32, now: f64) -> Option<DQuat> {
-        Some(self.rot.attitude(i, now))
-    }
+    crate::models::rotor::rotation_hooks!(rot);
 
     fn report(&self) -> Report {
         let mut r = Report::default();
@@ -1290,14 +1246,6 @@ impl<P: TerracedPotential> PairModel for Terraced<P> {
         (v, energy)
     }
 
-    fn draw_rotations(&mut self, now: f64, temperature: f64, rng: &mut Xoshiro256PlusPlus) {
-        self.rot.draw(now, temperature, rng);
-    }
-
-    fn reverse_rotations(&mut self) {
-        self.rot.reverse();
-    }
-
     fn extra_state(&self) -> Vec<f64> {
         let mut x = Vec::with_capacity(self.rot.numbers() + STATS_NUMBERS);
         self.rot.write(&mut x);
@@ -1318,10 +1266,6 @@ impl<P: TerracedPotential> PairModel for Terraced<P> {
         self.rot.read(rotations)?;
         self.stats = SearchStats::from_counts(c);
         Ok(())
-    }
-
-    fn scale_rotations(&mut self, now: f64, factor: f64) {
-        self.rot.scale(now, factor);
     }
 }
 
