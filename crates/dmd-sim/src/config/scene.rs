@@ -1959,37 +1959,7 @@ impl Scene {
                 "only rods have orientations (the bodies of this scene are spheres)",
             ));
         }
-        match (init.orientations, init.axis) {
-            (Orientations::Aligned, None) => {
-                return Err(SceneError::invalid(
-                    "init.axis",
-                    "needed by `orientations = \"aligned\"`: the common axis [x, y, z]",
-                ));
-            }
-            (Orientations::Aligned, Some(a)) => {
-                let len = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
-                if !(len.is_finite() && len > 0.0) {
-                    return Err(SceneError::invalid(
-                        "init.axis",
-                        format!("must be a nonzero finite vector, got {a:?}"),
-                    ));
-                }
-            }
-            (_, Some(_)) => {
-                return Err(SceneError::invalid(
-                    "init.axis",
-                    "only used with `orientations = \"aligned\"`",
-                ));
-            }
-            (Orientations::File, None) if init.positions != Positions::File => {
-                return Err(SceneError::invalid(
-                    "init.orientations",
-                    "`file` reads the orientation column of `init.file`: it needs \
-                     `positions = \"file\"`",
-                ));
-            }
-            _ => {}
-        }
+        check_orientation_keys(init)?;
         // Searches.
         if let Some(sr) = &self.search {
             if !rods {
@@ -2344,6 +2314,47 @@ fn parse_value(text: &str) -> toml::Value {
         .ok()
         .and_then(|mut t| t.remove("v"))
         .unwrap_or_else(|| toml::Value::String(text.to_owned()))
+}
+
+/// The checks of `init.orientations` and `init.axis` shared by every body with an axis: an
+/// aligned start needs a nonzero finite axis, the axis is only for an aligned start, and
+/// orientations from a file need positions from the file.
+///
+/// # Errors
+/// [`SceneError::Invalid`] naming the key.
+pub(crate) fn check_orientation_keys(init: &InitSpec) -> Result<(), SceneError> {
+    match (init.orientations, init.axis) {
+        (Orientations::Aligned, None) => {
+            return Err(SceneError::invalid(
+                "init.axis",
+                "needed by `orientations = \"aligned\"`: the common axis [x, y, z]",
+            ));
+        }
+        (Orientations::Aligned, Some(a)) => {
+            let len = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+            if !(len.is_finite() && len > 0.0) {
+                return Err(SceneError::invalid(
+                    "init.axis",
+                    format!("must be a nonzero finite vector, got {a:?}"),
+                ));
+            }
+        }
+        (_, Some(_)) => {
+            return Err(SceneError::invalid(
+                "init.axis",
+                "only used with `orientations = \"aligned\"`",
+            ));
+        }
+        (Orientations::File, None) if init.positions != Positions::File => {
+            return Err(SceneError::invalid(
+                "init.orientations",
+                "`file` reads the orientation column of `init.file`: it needs \
+                 `positions = \"file\"`",
+            ));
+        }
+        _ => {}
+    }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -19,7 +19,7 @@ use rand_xoshiro::Xoshiro256PlusPlus;
 use crate::analysis::output::given;
 use crate::config::init::{Configuration, read_orientations};
 use crate::config::rods::{equipartitioned_omegas, rotor_omegas};
-use crate::config::scene::{Engine, Orientations, Positions, Scene, SceneError, positive};
+use crate::config::scene::{Engine, Orientations, Scene, SceneError, positive};
 use crate::models::spherocylinders::{Spherocylinder, Spherocylinders, closest_points};
 
 /// The `kind` of a spherocylinder's `shape` table.
@@ -233,37 +233,7 @@ pub(crate) fn check(scene: &Scene) -> Result<(), SceneError> {
         ));
     }
     let init = &scene.init;
-    match (init.orientations, init.axis) {
-        (Orientations::Aligned, None) => {
-            return Err(SceneError::invalid(
-                "init.axis",
-                "needed by `orientations = \"aligned\"`: the common axis [x, y, z]",
-            ));
-        }
-        (Orientations::Aligned, Some(a)) => {
-            let len = DVec3::from(a).length();
-            if !(len.is_finite() && len > 0.0) {
-                return Err(SceneError::invalid(
-                    "init.axis",
-                    format!("must be a nonzero finite vector, got {a:?}"),
-                ));
-            }
-        }
-        (_, Some(_)) => {
-            return Err(SceneError::invalid(
-                "init.axis",
-                "only used with `orientations = \"aligned\"`",
-            ));
-        }
-        (Orientations::File, None) if init.positions != Positions::File => {
-            return Err(SceneError::invalid(
-                "init.orientations",
-                "`file` reads the orientation column of `init.file`: it needs \
-                 `positions = \"file\"`",
-            ));
-        }
-        _ => {}
-    }
+    crate::config::scene::check_orientation_keys(init)?;
     if init.velocities == crate::config::scene::Velocities::File
         && init.orientations != Orientations::File
     {
