@@ -66,7 +66,7 @@ pub use driver::{chains, checkpoint, hmc, interrupt, outdir, run, smd_engine, tu
 pub use engine::{
     body, cell, event, model, neighbour, pair_state, potential, saved, schedule, simulation, sum,
 };
-pub use models::{flexible, rotor, search, site_pairs, sites, spherocylinders, terraced};
+pub use models::{flexible, molecule, rotor, search, site_pairs, sites, spherocylinders, terraced};
 
 /// The README's example, compiled and run as a doctest so it cannot go stale.
 #[cfg(doctest)]

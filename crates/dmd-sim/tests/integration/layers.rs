@@ -10,7 +10,7 @@ const LAYERS: [&str; 5] = ["engine", "models", "analysis", "config", "driver"];
 
 /// The shared modules of `models`; every other module there is a body model, which may use the
 /// engine and these, not another model.
-const SHARED: [&str; 3] = ["rotor", "search", "site_pairs"];
+const SHARED: [&str; 4] = ["molecule", "rotor", "search", "site_pairs"];
 
 fn is_model(name: &str) -> bool {
     !SHARED.contains(&name)
