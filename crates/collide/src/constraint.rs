@@ -40,8 +40,8 @@ use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt;
 use glam::DVec3;
 
-use crate::CollideError;
 use crate::energy::{self, Impulse};
+use crate::{Body, CollideError, Velocity};
 
 /// Smallest accepted Cholesky pivot of `Z`, relative to its diagonal entry. Below it the
 /// constraint is (numerically) implied by the others. Near the limit the multipliers lose about
@@ -259,6 +259,53 @@ impl ConstraintSolver {
         apply(mol, &self.dir_i, impulse.s);
         Ok(impulse)
     }
+    /// Atom `atom_i` of molecule `mol_i` collides with a site of the rigid body `body_j`
+    /// (velocity `vel_j`): the site is at `site_j` (in the frame of `mol_i.positions`) and at
+    /// `arm_j` from `j`'s centre of mass. The molecule's side is 000 §IV.A, the rigid body's
+    /// 000 §IV.B (the push `−S n` at its site, `n = r_i − r_jβ`); both add to the same
+    /// quadratic, `a = a_i + ½(|n|²/M_j + τ·I_j⁻¹τ)`, `b = b_i + τ·ω_j − n·v_j` with
+    /// `τ = arm_j × (−n)`. Updates the molecule's velocities and returns the body's new one.
+    ///
+    /// # Errors
+    /// As [`between`](Self::between), and a torque the body cannot take (a torque along a
+    /// linear body's axis, any on a particle with a nonzero arm). On error nothing changes.
+    #[allow(clippy::too_many_arguments)]
+    pub fn against_rigid<B: Body>(
+        &mut self,
+        mol_i: Molecule<'_>,
+        atom_i: usize,
+        body_j: &B,
+        vel_j: Velocity,
+        site_j: DVec3,
+        arm_j: DVec3,
+        delta_v: f64,
+    ) -> Result<(Impulse, Velocity), CollideError> {
+        mol_i.check()?;
+        let n = mol_i.atom(atom_i)? - site_j;
+        if n == DVec3::ZERO {
+            return Err(CollideError::NoImpulse(
+                "the atom and the rigid body's site coincide",
+            ));
+        }
+        let torque = arm_j.cross(-n);
+        let spin = body_j.angular_response(torque)?;
+        let w_j = body_j.inv_mass();
+        let free = 0.5 * (1.0 / mol_i.masses[atom_i] + w_j) * n.length_squared();
+        let (a_i, b_i) = self.work.directions(
+            &mol_i,
+            [(atom_i, n), (atom_i, DVec3::ZERO)],
+            &mut self.dir_i,
+        )?;
+        let a_j = 0.5 * (w_j * n.length_squared() + torque.dot(spin));
+        let b_j = torque.dot(vel_j.angular) - n.dot(vel_j.linear);
+        let impulse = solve(a_i + a_j, b_i + b_j, free, delta_v)?;
+        apply(mol_i, &self.dir_i, impulse.s);
+        let s = impulse.s;
+        Ok((
+            impulse,
+            Velocity::new(vel_j.linear - (s * w_j) * n, vel_j.angular + s * spin),
+        ))
+    }
 }
 
 /// The energy equation, after checking that the constraints leave the pair free to move.
@@ -441,6 +488,127 @@ mod tests {
             .zip(v)
             .map(|(m, v)| 0.5 * m * v.length_squared())
             .sum()
+    }
+
+    #[test]
+    fn a_rigid_side_acts_as_its_bonded_framework() {
+        // A bonded dimer (atoms 0, 1) hits atom 2 of a triangle of unequal masses. The triangle
+        // once as three atoms held by three bonds, once as a rigid body: the same physics, so
+        // the same impulse and the same new velocities of every atom; energy, momentum and
+        // angular momentum conserved by the rigid route.
+        let (m_d, m_t) = ([1.0, 2.0], [1.0, 3.0, 0.5]);
+        let pos_d = [DVec3::new(-1.0, 0.2, 0.1), DVec3::new(-1.6, 0.5, -0.3)];
+        let vel_d0 = [DVec3::new(0.9, 0.1, 0.0), DVec3::new(0.7, -0.2, 0.3)];
+        let centre = DVec3::new(0.4, 0.1, -0.2);
+        let arms = [
+            DVec3::new(0.3, 0.5, 0.1),
+            DVec3::new(-0.2, -0.1, 0.05),
+            DVec3::new(-0.6, 0.0, 0.0),
+        ];
+        // Centre of mass at `centre`: shift the arms by their weighted mean.
+        let mean = arms
+            .iter()
+            .zip(&m_t)
+            .fold(DVec3::ZERO, |s, (d, m)| s + *m * *d)
+            / 4.5;
+        let arms: Vec<DVec3> = arms.iter().map(|&d| d - mean).collect();
+        let pos_t: Vec<DVec3> = arms.iter().map(|&d| centre + d).collect();
+        let (v_c, w) = (DVec3::new(-0.3, 0.2, 0.1), DVec3::new(0.5, -1.1, 0.7));
+        let vel_t0: Vec<DVec3> = arms.iter().map(|&d| v_c + w.cross(d)).collect();
+        let bonds_d = [Bond::new(0, 1)];
+        let bonds_t = [Bond::new(0, 1), Bond::new(1, 2), Bond::new(0, 2)];
+        for delta_v in [f64::INFINITY, 0.05, -0.2] {
+            let (mut vd_a, mut vt_a) = (vel_d0, vel_t0.clone());
+            let mut solver = ConstraintSolver::new();
+            let bonded = solver
+                .between(
+                    Molecule {
+                        masses: &m_d,
+                        positions: &pos_d,
+                        velocities: &mut vd_a,
+                        bonds: &bonds_d,
+                    },
+                    0,
+                    Molecule {
+                        masses: &m_t,
+                        positions: &pos_t,
+                        velocities: &mut vt_a,
+                        bonds: &bonds_t,
+                    },
+                    2,
+                    delta_v,
+                )
+                .unwrap();
+            let inertia = arms
+                .iter()
+                .zip(&m_t)
+                .fold(glam::DMat3::ZERO, |s, (&d, &m)| {
+                    s + glam::DMat3::from_diagonal(DVec3::splat(m * d.length_squared()))
+                        - m * glam::DMat3::from_cols(d * d.x, d * d.y, d * d.z)
+                });
+            let body = crate::RigidBody::from_lab_inertia(4.5, inertia).unwrap();
+            let mut vd_b = vel_d0;
+            let (rigid, after) = solver
+                .against_rigid(
+                    Molecule {
+                        masses: &m_d,
+                        positions: &pos_d,
+                        velocities: &mut vd_b,
+                        bonds: &bonds_d,
+                    },
+                    0,
+                    &body,
+                    Velocity::new(v_c, w),
+                    pos_t[2],
+                    arms[2],
+                    delta_v,
+                )
+                .unwrap();
+            assert_eq!(rigid.outcome, bonded.outcome, "ΔV = {delta_v}");
+            assert!(
+                (rigid.s - bonded.s).abs() < 1e-12 * bonded.s.abs(),
+                "{rigid:?} {bonded:?}"
+            );
+            for k in 0..2 {
+                assert!((vd_a[k] - vd_b[k]).length() < 1e-12, "dimer atom {k}");
+            }
+            let vt_b: Vec<DVec3> = arms
+                .iter()
+                .map(|&d| after.linear + after.angular.cross(d))
+                .collect();
+            for k in 0..3 {
+                assert!(
+                    (vt_a[k] - vt_b[k]).length() < 1e-12,
+                    "triangle atom {k}: {} {}",
+                    vt_a[k],
+                    vt_b[k]
+                );
+            }
+            let energy = |vd: &[DVec3], vt: &[DVec3]| ke(&m_d, vd) + ke(&m_t, vt);
+            let gained = energy(&vd_b, &vt_b) - energy(&vel_d0, &vel_t0);
+            assert!(
+                (gained + rigid.delta_v).abs() < 1e-13,
+                "ΔK = {gained}, ΔV = {}",
+                rigid.delta_v
+            );
+            let momentum = |vd: &[DVec3], vt: &[DVec3]| {
+                let p = |m: &[f64], v: &[DVec3]| {
+                    m.iter().zip(v).fold(DVec3::ZERO, |s, (m, v)| s + *m * *v)
+                };
+                let l = |m: &[f64], r: &[DVec3], v: &[DVec3]| {
+                    m.iter()
+                        .zip(r.iter().zip(v))
+                        .fold(DVec3::ZERO, |s, (m, (r, v))| s + *m * r.cross(*v))
+                };
+                (
+                    p(&m_d, vd) + p(&m_t, vt),
+                    l(&m_d, &pos_d, vd) + l(&m_t, &pos_t, vt),
+                )
+            };
+            let (p0, l0) = momentum(&vel_d0, &vel_t0);
+            let (p1, l1) = momentum(&vd_b, &vt_b);
+            assert!((p1 - p0).length() < 1e-13 && (l1 - l0).length() < 1e-13);
+        }
     }
 
     #[test]
