@@ -3,10 +3,11 @@
 //!
 //! The site kinds, `[[site_pair]]` tables and `[search]` keys are those of rigid site molecules
 //! ([`site_scene`](crate::config::site_scene)); this module adds the bonds, the RATTLE settings and the
-//! start. Every species of such a scene must have `bonds`: the loop runs one model, and the
-//! rigid-sites model and the flexible one cannot share it. Bonds that happen to make a molecule
-//! rigid are still integrated by RATTLE (the user asked for constraints; the exact rigid motion
-//! is what the same species without `bonds` gives).
+//! start. A species without `bonds` in such a scene is a rigid molecule: it moves by its exact
+//! free motion and meets the others through the same site tables (the [`Flexible`] model runs
+//! both). Bonds that happen to make a molecule rigid are still integrated by RATTLE (the user
+//! asked for constraints; the exact rigid motion is what the same species without `bonds`
+//! gives).
 //!
 //! **Start.** Centres on the scene's lattice (or file), each molecule's given configuration
 //! turned by a rotation uniform on SO(3) with Maxwell–Boltzmann internal velocities
@@ -95,12 +96,21 @@ pub(crate) fn types_of(
     let mut types = Vec::with_capacity(atoms.len());
     for (k, (s, a)) in scene.species.iter().zip(atoms).enumerate() {
         let Some(list) = &s.bonds else {
-            return Err(SceneError::invalid(
-                format!("species[{k}].bonds"),
-                "missing: a scene with semi-flexible molecules (species with `bonds`) runs them \
-                 all with RATTLE, and rigid site molecules cannot share the run; give this \
-                 species `bonds` too (3n − 6 independent bonds hold n sites rigid)",
-            ));
+            // A rigid molecule among semi-flexible ones: its exact free motion.
+            if s.interact_beyond_bonds.is_some() {
+                return Err(SceneError::invalid(
+                    format!("species[{k}].interact_beyond_bonds"),
+                    "only semi-flexible molecules (species with `bonds`) have sites that meet \
+                     each other: the sites of a rigid molecule keep their distances",
+                ));
+            }
+            types.push(FlexibleType::rigid(a).map_err(|e| {
+                SceneError::invalid(
+                    format!("species[{k}].sites"),
+                    format!("not a usable rigid molecule: {e}"),
+                )
+            })?);
+            continue;
         };
         if s.molecule.is_some() {
             return Err(SceneError::invalid(

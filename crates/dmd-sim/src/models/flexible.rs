@@ -81,8 +81,11 @@
 //! impulses sum to zero: the centre velocity stays, and the molecular virial gets nothing.
 
 pub mod rattle;
+pub mod rigid;
 
-use collide::{Bond, CollideError, ConstraintSolver, Molecule};
+use std::sync::Arc;
+
+use collide::{Bond, CollideError, ConstraintSolver, Contact, Molecule, Velocity, contact};
 use glam::{DQuat, DVec3};
 use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
@@ -94,10 +97,12 @@ use crate::engine::hash::mix;
 use crate::engine::model::{Executed, Pair, PairClass, PairModel, PairSetupError, Report};
 use crate::engine::potential::Potentials;
 use crate::engine::saved::{StateReader, push_count};
+use crate::models::molecule::{MoleculeError, MoleculeType, SiteBody};
 use crate::models::search::{SearchSettings, SearchStats, check_settings};
 use crate::models::site_pairs::{Firing, Pending, SiteAtom, SiteDistance, SiteSearch, SiteTable};
 
 pub use rattle::{Constraints, RattleError, Trajectory};
+pub use rigid::RigidMotion;
 
 /// Smallest accepted Cholesky pivot of the bonds' `Z` matrix at the reference configuration,
 /// relative to its diagonal: below it a bond is (nearly) implied by the others and SHAKE would
@@ -184,6 +189,9 @@ pub enum FlexibleError {
     /// More atoms than a site-pair table can index.
     #[error("a molecule of {0} atoms: at most 65535 are supported")]
     TooManyAtoms(usize),
+    /// A rigid molecule type is unusable.
+    #[error(transparent)]
+    Molecule(#[from] MoleculeError),
 }
 
 /// A semi-flexible molecule type: atoms, site species, bonds and their lengths.
@@ -200,6 +208,8 @@ pub struct FlexibleType {
     hops: Vec<u32>,
     /// Atom pairs `a < b` of one molecule that interact (none unless asked for).
     own: Vec<(u16, u16)>,
+    /// A rigid molecule (no bonds): moves by its exact free motion.
+    rigid: Option<Arc<MoleculeType>>,
 }
 
 impl FlexibleType {
@@ -311,13 +321,50 @@ impl FlexibleType {
             radii,
             hops,
             own: Vec::new(),
+            rigid: None,
         })
+    }
+
+    /// A rigid molecule of `atoms` among semi-flexible ones: no bonds, the exact free motion of
+    /// its [`MoleculeType`] between events ([`rigid`] module), the arms' exact lengths as
+    /// bounding radii.
+    ///
+    /// # Errors
+    /// [`FlexibleError::Molecule`] for what [`MoleculeType::new`] refuses, and more atoms than
+    /// a site-pair table can index.
+    pub fn rigid(atoms: &[SiteAtom]) -> Result<Self, FlexibleError> {
+        if atoms.len() > usize::from(u16::MAX) {
+            return Err(FlexibleError::TooManyAtoms(atoms.len()));
+        }
+        let m = MoleculeType::new(atoms)?;
+        let centre = m.centre();
+        Ok(FlexibleType {
+            mass: m.mass(),
+            masses: m.masses().to_vec(),
+            species: m.site_species().to_vec(),
+            bonds: Vec::new(),
+            lengths: Vec::new(),
+            reference: atoms.iter().map(|a| a.position - centre).collect(),
+            radii: m.radii.clone(),
+            hops: Vec::new(),
+            own: Vec::new(),
+            rigid: Some(Arc::new(m)),
+        })
+    }
+
+    /// The rigid molecule type, for a species without bonds ([`FlexibleType::rigid`]).
+    pub fn molecule(&self) -> Option<&MoleculeType> {
+        self.rigid.as_deref()
     }
 
     /// The molecule whose atoms more than `bonds` bonds apart (along the shortest bond path)
     /// interact with each other through their site species' potential, as atoms of different
     /// molecules do (`bonds ≥ 1`: bonded atoms never interact, their distance is held).
     pub fn interacting_beyond(mut self, bonds: u32) -> Self {
+        if self.rigid.is_some() {
+            // The atoms of a rigid molecule keep their distances.
+            return self;
+        }
         let n = self.masses.len();
         self.own = (0..n)
             .flat_map(|a| (a + 1..n).map(move |b| (a, b)))
@@ -368,9 +415,13 @@ impl FlexibleType {
         &self.radii
     }
 
-    /// Internal degrees of freedom `3n − 3 − (bonds)` (the bonds are independent).
+    /// Internal degrees of freedom: `3n − 3 − (bonds)` (the bonds are independent), or the
+    /// rotations of a rigid molecule (2 for a linear one, else 3).
     pub fn internal_dof(&self) -> f64 {
-        (3 * self.masses.len() - 3 - self.bonds.len()) as f64
+        match &self.rigid {
+            Some(m) => m.rotational_dof(),
+            None => (3 * self.masses.len() - 3 - self.bonds.len()) as f64,
+        }
     }
 
     /// The centre of mass of positions `q` of this molecule's atoms.
@@ -545,7 +596,7 @@ pub struct Flexible {
     constraints: Vec<Constraints>,
     /// Site pairs, their levels and searches, and the molecules' types.
     table: SiteTable,
-    trajectories: Vec<Trajectory>,
+    motions: Vec<Motion>,
     rattle: RattleSettings,
     solver: ConstraintSolver,
     flex: FlexStats,
@@ -572,6 +623,97 @@ fn kinetic(masses: &[f64], u: &[DVec3]) -> f64 {
         .zip(u)
         .map(|(m, x)| 0.5 * m * x.length_squared())
         .sum()
+}
+
+/// How one molecule's atoms move between its events.
+#[derive(Clone, Debug)]
+enum Motion {
+    /// A semi-flexible molecule: RATTLE steps and their interpolant.
+    Rattle(Trajectory),
+    /// A rigid molecule: its exact free motion (boxed: a free motion is several times the
+    /// size of a trajectory's record).
+    Rigid(Box<RigidMotion>),
+}
+
+impl Motion {
+    /// Drops RATTLE steps behind `now`.
+    fn trim(&mut self, now: f64) {
+        if let Motion::Rattle(t) = self {
+            t.trim(now);
+        }
+    }
+
+    /// RATTLE steps computed so far.
+    fn computed_steps(&self) -> usize {
+        match self {
+            Motion::Rattle(t) => t.computed_steps(),
+            Motion::Rigid(_) => 0,
+        }
+    }
+
+    /// A RATTLE step failed.
+    fn failed(&self) -> bool {
+        matches!(self, Motion::Rattle(t) if t.failure().is_some())
+    }
+
+    /// Arm and velocity of atom `a` about the centre at `t`.
+    #[inline]
+    fn atom_at(
+        &mut self,
+        c: &Constraints,
+        t: f64,
+        a: usize,
+    ) -> Result<(DVec3, DVec3), RattleError> {
+        match self {
+            Motion::Rattle(tr) => tr.atom_at(c, t, a),
+            Motion::Rigid(m) => Ok(m.atom_at(t, a)),
+        }
+    }
+
+    /// Arms and velocities of every atom at `t`, keeping computed RATTLE steps.
+    fn state_at(
+        &mut self,
+        c: &Constraints,
+        t: f64,
+    ) -> Result<(Vec<DVec3>, Vec<DVec3>), RattleError> {
+        match self {
+            Motion::Rattle(tr) => tr.state_at(c, t),
+            Motion::Rigid(m) => Ok(m.state_at(t)),
+        }
+    }
+
+    /// Arms and velocities of every atom at `t`, read-only.
+    fn peek(&self, c: &Constraints, t: f64) -> Result<(Vec<DVec3>, Vec<DVec3>), RattleError> {
+        match self {
+            Motion::Rattle(tr) => tr.peek(c, t),
+            Motion::Rigid(m) => Ok(m.state_at(t)),
+        }
+    }
+
+    /// Arms and velocities at the last change.
+    fn initial(&self) -> (&[DVec3], &[DVec3]) {
+        match self {
+            Motion::Rattle(t) => t.initial(),
+            Motion::Rigid(m) => m.initial(),
+        }
+    }
+
+    /// Moves the time origin to `t0`.
+    fn rebase(&mut self, t0: f64) {
+        match self {
+            // The steps stay: only their time origin moves (re-anchoring would change the
+            // trajectory by the interpolation error, not by round-off).
+            Motion::Rattle(t) => t.shift_time(t0),
+            Motion::Rigid(m) => m.rebase(t0),
+        }
+    }
+
+    fn write_numbers(&self, x: &mut Vec<f64>) {
+        match self {
+            Motion::Rattle(t) => t.write_numbers(x),
+            Motion::Rigid(m) => m.write_numbers(x),
+        }
+    }
 }
 
 impl Flexible {
@@ -619,7 +761,7 @@ impl Flexible {
                 ),
             });
         }
-        let mut trajectories = Vec::with_capacity(body_type.len());
+        let mut motions = Vec::with_capacity(body_type.len());
         for (i, &ty) in body_type.iter().enumerate() {
             let Some(t) = types.get(ty as usize) else {
                 return Err(FlexibleError::Type { body: i, kind: ty });
@@ -642,6 +784,12 @@ impl Flexible {
             let vc = t.centre_of(u);
             let mut q: Vec<DVec3> = q.iter().map(|&x| x - centre).collect();
             let mut u: Vec<DVec3> = u.iter().map(|&x| x - vc).collect();
+            if let Some(m) = &t.rigid {
+                let motion = RigidMotion::fitted(Arc::clone(m), t0, &q, &u, START_TOLERANCE)
+                    .map_err(body)?;
+                motions.push(Motion::Rigid(Box::new(motion)));
+                continue;
+            }
             let off = c.violation(&q);
             if off > START_TOLERANCE {
                 return Err(body(format!(
@@ -652,7 +800,7 @@ impl Flexible {
             c.project_positions(&mut q)
                 .and_then(|()| c.project_velocities(&q, &mut u))
                 .map_err(|e| body(e.to_string()))?;
-            trajectories.push(Trajectory::new(t0, rattle.step, &q, &u));
+            motions.push(Motion::Rattle(Trajectory::new(t0, rattle.step, &q, &u)));
         }
         let own: Vec<Vec<(u16, u16)>> = types.iter().map(|t| t.own.clone()).collect();
         let species: Vec<&[u32]> = types.iter().map(|t| &t.species[..]).collect();
@@ -668,7 +816,7 @@ impl Flexible {
             types,
             constraints,
             table,
-            trajectories,
+            motions,
             rattle,
             solver: ConstraintSolver::new(),
             flex: FlexStats::default(),
@@ -694,12 +842,7 @@ impl Flexible {
     /// What the RATTLE side did so far.
     pub fn flex_stats(&self) -> FlexStats {
         let mut f = self.flex;
-        f.failures = self
-            .trajectories
-            .iter()
-            .filter(|t| t.failure().is_some())
-            .count() as u64
-            + self.flex.failures;
+        f.failures = self.motions.iter().filter(|m| m.failed()).count() as u64 + self.flex.failures;
         f
     }
 
@@ -714,14 +857,14 @@ impl Flexible {
         now: f64,
     ) -> Result<(Vec<DVec3>, Vec<DVec3>), RattleError> {
         let ty = self.table.type_of(i);
-        self.trajectories[i as usize].peek(&self.constraints[ty], now)
+        self.motions[i as usize].peek(&self.constraints[ty], now)
     }
 
     /// Largest relative bond-length error over all molecules at their last change (where the
     /// state is projected) and at `now` (interpolated).
     pub fn bond_error(&self, now: f64) -> f64 {
         let mut worst: f64 = 0.0;
-        for (i, t) in self.trajectories.iter().enumerate() {
+        for (i, t) in self.motions.iter().enumerate() {
             let c = &self.constraints[self.table.type_of(i as u32)];
             worst = worst.max(c.violation(t.initial().0));
             match self.internal_state(i as u32, now) {
@@ -737,12 +880,12 @@ impl Flexible {
         self.table.site_level(i, j, a, b)
     }
 
-    /// Runs every site pair of `pair` whose search is due (on the RATTLE trajectories), then
+    /// Runs every site pair of `pair` whose search is due (on the molecules' motions), then
     /// picks the pair's next event ([`SiteTable::choose`]); a failed RATTLE step makes it due
     /// at once.
     fn search(
         table: &mut SiteTable,
-        (trajectories, constraints, flex): (&mut [Trajectory], &[Constraints], &mut FlexStats),
+        (motions, constraints, flex): (&mut [Motion], &[Constraints], &mut FlexStats),
         pair: &Pair,
         mut sites: Vec<SiteSearch>,
         fresh: bool,
@@ -752,21 +895,21 @@ impl Flexible {
         } = *pair;
         let (ti, tj) = (table.type_of(i), table.type_of(j));
         // Steps behind the present are not needed again.
-        trajectories[i as usize].trim(now);
-        trajectories[j as usize].trim(now);
+        motions[i as usize].trim(now);
+        motions[j as usize].trim(now);
         let before: usize =
-            trajectories[i as usize].computed_steps() + trajectories[j as usize].computed_steps();
+            motions[i as usize].computed_steps() + motions[j as usize].computed_steps();
         if i == j {
             let mut geo = OwnGeometry {
-                traj: &mut trajectories[i as usize],
+                motion: &mut motions[i as usize],
                 c: &constraints[ti],
             };
             table.search_due(&mut geo, (i, j), now, &mut sites, fresh);
         } else {
-            let (traj_i, traj_j) = two(trajectories, i as usize, j as usize);
+            let (motion_i, motion_j) = two(motions, i as usize, j as usize);
             let mut geo = FlexGeometry {
-                traj_i,
-                traj_j,
+                motion_i,
+                motion_j,
                 ci: &constraints[ti],
                 cj: &constraints[tj],
                 dr,
@@ -776,11 +919,9 @@ impl Flexible {
             table.search_due(&mut geo, (i, j), now, &mut sites, fresh);
         }
         let after: usize =
-            trajectories[i as usize].computed_steps() + trajectories[j as usize].computed_steps();
+            motions[i as usize].computed_steps() + motions[j as usize].computed_steps();
         flex.steps += after.saturating_sub(before) as u64;
-        if trajectories[i as usize].failure().is_some()
-            || trajectories[j as usize].failure().is_some()
-        {
+        if motions[i as usize].failed() || motions[j as usize].failed() {
             table.save(i, j, now, Pending::Broken);
             return Some((0.0, Kind::Pair(Boundary::Inner)));
         }
@@ -799,7 +940,7 @@ impl Flexible {
         vj: &mut DVec3,
     ) -> Result<Executed, CollideError> {
         let t = self.table.type_of(i);
-        let (q, mut u) = self.trajectories[i as usize]
+        let (q, mut u) = self.motions[i as usize]
             .state_at(&self.constraints[t], now)
             .map_err(|_| BROKEN)?;
         self.rescale(i as usize, &mut u);
@@ -843,6 +984,60 @@ impl Flexible {
         })
     }
 
+    /// A rigid molecule as an impulse rule sees it at `now`, with its lab angular velocity
+    /// (`None` for a semi-flexible one).
+    fn rigid_at(&self, i: u32, now: f64) -> Result<Option<(SiteBody, DVec3)>, CollideError> {
+        match &self.motions[i as usize] {
+            Motion::Rigid(m) => m.body_at(now).map(Some),
+            Motion::Rattle(_) => Ok(None),
+        }
+    }
+
+    /// Restarts molecule `i` at `now` after an impulse and returns its new centre velocity:
+    /// a rigid molecule from the rule's new velocity `rigid`, a semi-flexible one from its
+    /// atoms' new lab velocities `vel` at arms `q` (the centre's part taken off, the rest
+    /// projected onto the bonds' tangent).
+    fn after_impulse(
+        &mut self,
+        i: u32,
+        now: f64,
+        q: Vec<DVec3>,
+        vel: &[DVec3],
+        rigid: Option<Velocity>,
+    ) -> Result<DVec3, CollideError> {
+        if let (Motion::Rigid(m), Some(v)) = (&self.motions[i as usize], rigid) {
+            let next = m
+                .restarted(now, v.angular)
+                .map_err(|_| CollideError::NotFinite("angular velocity after the impulse"))?;
+            self.motions[i as usize] = Motion::Rigid(Box::new(next));
+            self.flex.restarts += 1;
+            return Ok(v.linear);
+        }
+        let t = &self.types[self.table.type_of(i)];
+        let centre = t.centre_of(vel);
+        let internal: Vec<DVec3> = vel.iter().map(|&x| x - centre).collect();
+        let keep = self.rattle.rescale;
+        self.restart(i, now, q, internal, keep)
+            .map_err(|_| BROKEN)?;
+        Ok(centre)
+    }
+
+    /// A rigid molecule `i` restarts at `now` with its angular velocity times `factor`
+    /// (exactly: nothing projected); `false` for a semi-flexible one.
+    fn respin(&mut self, i: u32, now: f64, factor: f64) -> bool {
+        let Motion::Rigid(m) = &self.motions[i as usize] else {
+            return false;
+        };
+        match m.restarted(now, factor * m.pose(now).1) {
+            Ok(next) => {
+                self.motions[i as usize] = Motion::Rigid(Box::new(next));
+                self.flex.restarts += 1;
+            }
+            Err(_) => self.flex.failures += 1,
+        }
+        true
+    }
+
     /// Starts molecule `i` afresh at `now` from internal positions `q` (kept as they are: the
     /// event's site pair stays at its boundary) and velocities `u` (projected onto the tangent
     /// of the bonds there; with `keep`, scaled back to their kinetic energy before the
@@ -856,6 +1051,17 @@ impl Flexible {
         keep: bool,
     ) -> Result<f64, RattleError> {
         let ty = self.table.type_of(i);
+        if let Motion::Rigid(m) = &self.motions[i as usize] {
+            // The rotation of the atoms' angular momentum: the mass-weighted projection of `u`
+            // onto the rigid motions (the orientation is the motion's own at `now`).
+            let (o, _) = m.pose(now);
+            let w = m.omega_of_atoms(o, &q, &u);
+            let k0 = kinetic(&self.types[ty].masses, &u);
+            let next = m.restarted(now, w).map_err(|_| RattleError::NotFinite)?;
+            self.motions[i as usize] = Motion::Rigid(Box::new(next));
+            self.flex.restarts += 1;
+            return Ok(k0 - self.internal_kinetic(i as usize));
+        }
         let c = &self.constraints[ty];
         let t = &self.types[ty];
         self.flex.interpolated_bond_error = self.flex.interpolated_bond_error.max(c.violation(&q));
@@ -872,14 +1078,17 @@ impl Flexible {
             }
         }
         self.flex.restarts += 1;
-        self.trajectories[i as usize].reset(now, &q, &u);
+        if let Motion::Rattle(t) = &mut self.motions[i as usize] {
+            t.reset(now, &q, &u);
+        }
         Ok(k0 - k1)
     }
 
     /// With [`RattleSettings::rescale`], scales molecule `i`'s interpolated internal velocities
     /// `u` to the kinetic energy of its start, which the exact free motion conserves.
     fn rescale(&self, i: usize, u: &mut [DVec3]) {
-        if !self.rattle.rescale {
+        // A rigid molecule's free motion conserves its kinetic energy exactly.
+        if !self.rattle.rescale || matches!(self.motions[i], Motion::Rigid(_)) {
             return;
         }
         let t = &self.types[self.table.type_of(i as u32)];
@@ -895,7 +1104,7 @@ impl Flexible {
     /// Internal kinetic energy of molecule `i` at its last change.
     fn internal_kinetic(&self, i: usize) -> f64 {
         let t = &self.types[self.table.type_of(i as u32)];
-        kinetic(&t.masses, self.trajectories[i].initial().1)
+        kinetic(&t.masses, self.motions[i].initial().1)
     }
 
     /// Draws molecule `i`'s internal velocities afresh at `kt` at `now` (Gaussian atom
@@ -911,7 +1120,7 @@ impl Flexible {
     ) -> Result<f64, RattleError> {
         let ty = self.table.type_of(i);
         let before = self.internal_kinetic(i as usize);
-        let (q, _) = self.trajectories[i as usize].state_at(&self.constraints[ty], now)?;
+        let (q, _) = self.motions[i as usize].state_at(&self.constraints[ty], now)?;
         let u = draw_velocities(&self.types[ty], kt, rng);
         self.restart(i, now, q, u, false)?;
         Ok(self.internal_kinetic(i as usize) - before)
@@ -965,8 +1174,8 @@ pub fn random_internal(
 
 /// The two molecules of a pair and their relative centre motion: what the indicators need.
 struct FlexGeometry<'a> {
-    traj_i: &'a mut Trajectory,
-    traj_j: &'a mut Trajectory,
+    motion_i: &'a mut Motion,
+    motion_j: &'a mut Motion,
     ci: &'a Constraints,
     cj: &'a Constraints,
     dr: DVec3,
@@ -975,12 +1184,12 @@ struct FlexGeometry<'a> {
 }
 
 impl SiteDistance for FlexGeometry<'_> {
-    /// On the RATTLE trajectories (NaN if a step failed).
+    /// On the molecules' motions (NaN if a RATTLE step failed).
     #[inline]
     fn distance2(&mut self, a: usize, b: usize, t: f64) -> (f64, f64) {
         match (
-            self.traj_i.atom_at(self.ci, t, a),
-            self.traj_j.atom_at(self.cj, t, b),
+            self.motion_i.atom_at(self.ci, t, a),
+            self.motion_j.atom_at(self.cj, t, b),
         ) {
             (Ok((qa, ua)), Ok((qb, ub))) => {
                 let r = self.dr + self.dv * (t - self.now) + qa - qb;
@@ -994,7 +1203,7 @@ impl SiteDistance for FlexGeometry<'_> {
 
 /// Where two atoms of one molecule are, on its RATTLE trajectory.
 struct OwnGeometry<'a> {
-    traj: &'a mut Trajectory,
+    motion: &'a mut Motion,
     c: &'a Constraints,
 }
 
@@ -1003,8 +1212,8 @@ impl SiteDistance for OwnGeometry<'_> {
     #[inline]
     fn distance2(&mut self, a: usize, b: usize, t: f64) -> (f64, f64) {
         match (
-            self.traj.atom_at(self.c, t, a),
-            self.traj.atom_at(self.c, t, b),
+            self.motion.atom_at(self.c, t, a),
+            self.motion.atom_at(self.c, t, b),
         ) {
             (Ok((qa, ua)), Ok((qb, ub))) => {
                 let (r, u) = (qa - qb, ua - ub);
@@ -1047,28 +1256,20 @@ impl PairModel for Flexible {
             i,
             j,
             dr,
-            self.trajectories[i as usize].initial().0,
-            self.trajectories[j as usize].initial().0,
+            self.motions[i as usize].initial().0,
+            self.motions[j as usize].initial().0,
         )
     }
 
     fn predict(&mut self, pair: &Pair) -> Option<(f64, Kind)> {
-        let motion = (
-            &mut self.trajectories[..],
-            &self.constraints[..],
-            &mut self.flex,
-        );
+        let motion = (&mut self.motions[..], &self.constraints[..], &mut self.flex);
         self.table.predict(pair, |table, sites, fresh| {
             Self::search(table, motion, pair, sites, fresh)
         })
     }
 
     fn resume(&mut self, pair: &Pair) -> Option<(f64, Kind)> {
-        let motion = (
-            &mut self.trajectories[..],
-            &self.constraints[..],
-            &mut self.flex,
-        );
+        let motion = (&mut self.motions[..], &self.constraints[..], &mut self.flex);
         self.table.resume(pair, |table, sites, fresh| {
             Self::search(table, motion, pair, sites, fresh)
         })
@@ -1099,10 +1300,10 @@ impl PairModel for Flexible {
         }
         let (ti, tj) = (self.table.type_of(i), self.table.type_of(j));
         // The atoms exactly as the search saw them.
-        let (qi, mut ui) = self.trajectories[i as usize]
+        let (qi, mut ui) = self.motions[i as usize]
             .state_at(&self.constraints[ti], now)
             .map_err(|_| BROKEN)?;
-        let (qj, mut uj) = self.trajectories[j as usize]
+        let (qj, mut uj) = self.motions[j as usize]
             .state_at(&self.constraints[tj], now)
             .map_err(|_| BROKEN)?;
         self.rescale(i as usize, &mut ui);
@@ -1119,24 +1320,44 @@ impl PairModel for Flexible {
         let pos_i: Vec<DVec3> = qi.iter().map(|&x| dr + x).collect();
         let mut vel_i: Vec<DVec3> = ui.iter().map(|&x| *vi + x).collect();
         let mut vel_j: Vec<DVec3> = uj.iter().map(|&x| *vj + x).collect();
+        let (rigid_i, rigid_j) = (self.rigid_at(i, now)?, self.rigid_at(j, now)?);
         let (type_i, type_j) = (&self.types[ti], &self.types[tj]);
-        let imp = self.solver.between(
-            Molecule {
-                masses: &type_i.masses,
-                positions: &pos_i,
-                velocities: &mut vel_i,
-                bonds: &type_i.bonds,
-            },
-            a,
-            Molecule {
-                masses: &type_j.masses,
-                positions: &qj,
-                velocities: &mut vel_j,
-                bonds: &type_j.bonds,
-            },
-            b,
-            step,
-        )?;
+        let mol_i = Molecule {
+            masses: &type_i.masses,
+            positions: &pos_i,
+            velocities: &mut vel_i,
+            bonds: &type_i.bonds,
+        };
+        let mol_j = Molecule {
+            masses: &type_j.masses,
+            positions: &qj,
+            velocities: &mut vel_j,
+            bonds: &type_j.bonds,
+        };
+        // The impulse on i is `S n` in every pairing: constrained atoms (000 §IV.A), a rigid
+        // molecule (000 §IV.B), or one of each.
+        let (imp, after_i, after_j) = match (rigid_i, rigid_j) {
+            (None, None) => (self.solver.between(mol_i, a, mol_j, b, step)?, None, None),
+            (None, Some((body, w))) => {
+                let v = Velocity::new(*vj, w);
+                let (imp, after) = self
+                    .solver
+                    .against_rigid(mol_i, a, &body, v, qj[b], qj[b], step)?;
+                (imp, None, Some(after))
+            }
+            (Some((body, w)), None) => {
+                let v = Velocity::new(*vi, w);
+                let (imp, after) = self
+                    .solver
+                    .against_rigid(mol_j, b, &body, v, pos_i[a], qi[a], step)?;
+                (imp, Some(after), None)
+            }
+            (Some((bi, wi)), Some((bj, wj))) => {
+                let (vel_i, vel_j) = (Velocity::new(*vi, wi), Velocity::new(*vj, wj));
+                let out = contact(&bi, &bj, vel_i, vel_j, &Contact::new(n, qi[a], qj[b]), step)?;
+                (out.impulse, Some(out.i), Some(out.j))
+            }
+        };
         // Kinetic energy as the loop counts it (centres, internal motion at the starts).
         let counted = |this: &Self, vi: DVec3, vj: DVec3| {
             0.5 * this.types[ti].mass * vi.length_squared()
@@ -1145,13 +1366,8 @@ impl PairModel for Flexible {
                 + this.internal_kinetic(j as usize)
         };
         let before = counted(self, *vi, *vj);
-        let new_vi = type_i.centre_of(&vel_i);
-        let new_vj = type_j.centre_of(&vel_j);
-        let int_i: Vec<DVec3> = vel_i.iter().map(|&x| x - new_vi).collect();
-        let int_j: Vec<DVec3> = vel_j.iter().map(|&x| x - new_vj).collect();
-        let keep = self.rattle.rescale;
-        self.restart(i, now, qi, int_i, keep).map_err(|_| BROKEN)?;
-        self.restart(j, now, qj, int_j, keep).map_err(|_| BROKEN)?;
+        let new_vi = self.after_impulse(i, now, qi, &vel_i, after_i)?;
+        let new_vj = self.after_impulse(j, now, qj, &vel_j, after_j)?;
         *vi = new_vi;
         *vj = new_vj;
         // What the loop does not see: the change beyond −ΔU (the RATTLE step's energy error
@@ -1193,8 +1409,8 @@ impl PairModel for Flexible {
 
     fn extra_state(&self) -> Vec<f64> {
         let mut x = Vec::new();
-        for t in &self.trajectories {
-            t.write_numbers(&mut x);
+        for m in &self.motions {
+            m.write_numbers(&mut x);
         }
         self.table.write_numbers(&mut x);
         let f = &self.flex;
@@ -1211,13 +1427,16 @@ impl PairModel for Flexible {
 
     fn set_extra_state(&mut self, state: &[f64]) -> Result<(), String> {
         let mut r = StateReader::new(state);
-        let mut trajectories = Vec::with_capacity(self.trajectories.len());
+        let mut motions = Vec::with_capacity(self.motions.len());
         for (i, &ty) in self.table.body_type.iter().enumerate() {
-            let atoms = self.types[ty as usize].masses.len();
-            trajectories.push(
-                Trajectory::read_numbers(&mut r, self.rattle.step, atoms)
-                    .map_err(|e| format!("molecule {i}: {e}"))?,
-            );
+            let t = &self.types[ty as usize];
+            let motion = match &t.rigid {
+                Some(m) => RigidMotion::read_numbers(&mut r, Arc::clone(m))
+                    .map(|m| Motion::Rigid(Box::new(m))),
+                None => Trajectory::read_numbers(&mut r, self.rattle.step, t.masses.len())
+                    .map(Motion::Rattle),
+            };
+            motions.push(motion.map_err(|e| format!("molecule {i}: {e}"))?);
         }
         let table = self.table.read_numbers(&mut r)?;
         let flex = FlexStats {
@@ -1229,7 +1448,7 @@ impl PairModel for Flexible {
         };
         let kinetic_error = r.real("the kinetic energy error")?;
         r.finish()?;
-        self.trajectories = trajectories;
+        self.motions = motions;
         self.table.commit(table);
         self.flex = flex;
         self.kinetic_error = kinetic_error;
@@ -1257,16 +1476,14 @@ impl PairModel for Flexible {
     }
 
     fn rebase(&mut self, t0: f64) {
-        // The steps stay: only their time origin moves (re-anchoring would change the
-        // trajectory by the interpolation error, not by round-off).
-        for t in &mut self.trajectories {
-            t.shift_time(t0);
+        for m in &mut self.motions {
+            m.rebase(t0);
         }
     }
 
     fn rotational_kinetic(&self) -> f64 {
         let mut k = crate::engine::sum::Compensated::ZERO;
-        for i in 0..self.trajectories.len() {
+        for i in 0..self.motions.len() {
             k.add(self.internal_kinetic(i));
         }
         k.value()
@@ -1304,7 +1521,7 @@ impl PairModel for Flexible {
     }
 
     fn spin(&self, i: u32, s: u32) -> DVec3 {
-        let (q, u) = self.trajectories[i as usize].initial();
+        let (q, u) = self.motions[i as usize].initial();
         self.types[s as usize]
             .masses
             .iter()
@@ -1320,7 +1537,7 @@ impl PairModel for Flexible {
     }
 
     fn log_metric(&self, now: f64) -> f64 {
-        (0..self.trajectories.len())
+        (0..self.motions.len())
             .map(|i| match self.internal_state(i as u32, now) {
                 Ok((q, _)) => {
                     let ty = &self.types[self.table.type_of(i as u32)];
@@ -1340,7 +1557,7 @@ impl PairModel for Flexible {
     }
 
     fn draw_rotations(&mut self, now: f64, temperature: f64, rng: &mut Xoshiro256PlusPlus) {
-        for i in 0..self.trajectories.len() as u32 {
+        for i in 0..self.motions.len() as u32 {
             if self.draw_internal(i, now, temperature, rng).is_err() {
                 self.flex.failures += 1;
             }
@@ -1350,9 +1567,12 @@ impl PairModel for Flexible {
     fn reverse_rotations(&mut self) {
         // Called at a re-basing: the present is time 0. Each molecule restarts there with its
         // internal velocities reversed.
-        for i in 0..self.trajectories.len() as u32 {
+        for i in 0..self.motions.len() as u32 {
+            if self.respin(i, 0.0, -1.0) {
+                continue;
+            }
             let ty = self.table.type_of(i);
-            let state = self.trajectories[i as usize].state_at(&self.constraints[ty], 0.0);
+            let state = self.motions[i as usize].state_at(&self.constraints[ty], 0.0);
             let done = state.and_then(|(q, mut u)| {
                 self.rescale(i as usize, &mut u);
                 let keep = self.rattle.rescale;
@@ -1368,9 +1588,12 @@ impl PairModel for Flexible {
         // Each molecule restarts at `now` from its interpolated state with its internal
         // velocities scaled (brought first to the kinetic energy of its start when `rescale`
         // is on, as at events, so that the scaled energy is factor² times the tracked one).
-        for i in 0..self.trajectories.len() as u32 {
+        for i in 0..self.motions.len() as u32 {
+            if self.respin(i, now, factor) {
+                continue;
+            }
             let ty = self.table.type_of(i);
-            let state = self.trajectories[i as usize].state_at(&self.constraints[ty], now);
+            let state = self.motions[i as usize].state_at(&self.constraints[ty], now);
             let done = state.and_then(|(q, mut u)| {
                 self.rescale(i as usize, &mut u);
                 let keep = self.rattle.rescale;
@@ -1543,7 +1766,7 @@ mod tests {
         assert!(matches!(mk(rattle, &off), Err(FlexibleError::Body { .. })));
         // The velocities are projected: bond rates vanish, centre velocity is off.
         let m = mk(rattle, &q).unwrap();
-        let (q0, u0) = m.trajectories[0].initial();
+        let (q0, u0) = m.motions[0].initial();
         assert!(m.constraints[0].rate_violation(q0, u0) < 1e-11);
         assert!(t.centre_of(u0).length() < 1e-15);
     }

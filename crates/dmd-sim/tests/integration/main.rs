@@ -13,6 +13,7 @@ mod gsd_output;
 mod gsd_start;
 mod hmc;
 mod layers;
+mod mixed_scenes;
 mod physics;
 mod plots;
 mod reference;
