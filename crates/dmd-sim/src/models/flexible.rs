@@ -74,6 +74,16 @@
 //! [`PairModel::log_metric`] sums it over molecules, and HMC divides it out when asked for the
 //! stiff-bond ensemble instead.
 //!
+//! **Rigid molecules among them.** A type built by [`FlexibleType::rigid`] (a species without
+//! bonds) moves by the exact free motion of its rigid molecule ([`rigid`] module) instead of
+//! RATTLE: its atoms' arms and velocities at time `t` come from the motion's pose, so the same
+//! site searches run on it. An event between a semi-flexible and a rigid molecule applies the
+//! impulse at the rigid one's site (000 §IV.B) and the other's constraint forces (000 §IV.A) in
+//! one energy equation (`ConstraintSolver::against_rigid`); two rigid molecules meet by the
+//! contact rule (`collide::contact`). A rigid molecule restarts from its new angular velocity;
+//! thermostat and HMC draws give it the rotation of the drawn atoms' angular momentum (the
+//! mass-weighted projection onto rotations, Maxwell–Boltzmann in `ω`).
+//!
 //! **Atoms of one molecule.** With [`FlexibleType::interacting_beyond`], atoms more than a
 //! given number of bonds apart meet through their site–site potential: the pair of a molecule
 //! with itself ([`PairModel::self_pairs`]), searched on the molecule's one RATTLE trajectory,
