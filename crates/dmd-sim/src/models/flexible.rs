@@ -107,7 +107,7 @@ use crate::engine::hash::mix;
 use crate::engine::model::{Executed, Pair, PairClass, PairModel, PairSetupError, Report};
 use crate::engine::potential::Potentials;
 use crate::engine::saved::{StateReader, push_count};
-use crate::models::molecule::{MoleculeError, MoleculeType, SiteBody};
+use crate::models::molecule::{MoleculeError, MoleculeType, SiteBody, check_atoms};
 use crate::models::search::{SearchSettings, SearchStats, check_settings};
 use crate::models::site_pairs::{Firing, Pending, SiteAtom, SiteDistance, SiteSearch, SiteTable};
 
@@ -126,20 +126,6 @@ pub const START_TOLERANCE: f64 = 1e-6;
 /// Why a semi-flexible molecule type or model could not be built.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum FlexibleError {
-    /// Fewer than two atoms.
-    #[error("a molecule needs at least two atoms, got {0}")]
-    TooFewAtoms(usize),
-    /// A mass is not positive and finite.
-    #[error("atom {atom}: mass {mass} must be positive and finite")]
-    Mass {
-        /// The atom.
-        atom: usize,
-        /// The mass.
-        mass: f64,
-    },
-    /// A position is not finite.
-    #[error("atom {0}: position is not finite")]
-    Position(usize),
     /// A bond is malformed.
     #[error("bond {bond} ({a}, {b}): {problem}")]
     Bond {
@@ -199,7 +185,7 @@ pub enum FlexibleError {
     /// More atoms than a site-pair table can index.
     #[error("a molecule of {0} atoms: at most 65535 are supported")]
     TooManyAtoms(usize),
-    /// A rigid molecule type is unusable.
+    /// The atoms are unusable (too few, a bad mass or position), or a rigid molecule type is.
     #[error(transparent)]
     Molecule(#[from] MoleculeError),
 }
@@ -231,22 +217,9 @@ impl FlexibleType {
     /// duplicated or dependent bonds, and atoms not connected by bonds.
     pub fn new(atoms: &[SiteAtom], bonds: &[Bond]) -> Result<Self, FlexibleError> {
         let n = atoms.len();
-        if n < 2 {
-            return Err(FlexibleError::TooFewAtoms(n));
-        }
+        check_atoms(atoms)?;
         if n > usize::from(u16::MAX) {
             return Err(FlexibleError::TooManyAtoms(n));
-        }
-        for (k, a) in atoms.iter().enumerate() {
-            if !(a.mass.is_finite() && a.mass > 0.0) {
-                return Err(FlexibleError::Mass {
-                    atom: k,
-                    mass: a.mass,
-                });
-            }
-            if !a.position.is_finite() {
-                return Err(FlexibleError::Position(k));
-            }
         }
         let bad = |bond: usize, b: &Bond, problem| FlexibleError::Bond {
             bond,
@@ -1619,14 +1592,7 @@ impl PairModel for Flexible {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn atom(x: f64, y: f64, z: f64, mass: f64) -> SiteAtom {
-        SiteAtom {
-            position: DVec3::new(x, y, z),
-            mass,
-            species: 0,
-        }
-    }
+    use crate::models::site_pairs::atom;
 
     /// A bent trimer of masses `m1, m2, m3` and bonds `b1, b2` at bend angle `theta`.
     fn trimer(theta: f64, m: [f64; 3], b: [f64; 2]) -> [SiteAtom; 3] {
@@ -1668,7 +1634,7 @@ mod tests {
         let two = [atom(0.0, 0.0, 0.0, 1.0), atom(1.0, 0.0, 0.0, 1.0)];
         assert!(matches!(
             FlexibleType::new(&two[..1], &[]),
-            Err(FlexibleError::TooFewAtoms(1))
+            Err(FlexibleError::Molecule(MoleculeError::TooFewAtoms(1)))
         ));
         assert!(matches!(
             FlexibleType::new(&two, &[Bond::new(0, 2)]),
@@ -1686,7 +1652,7 @@ mod tests {
         heavy[1].mass = -1.0;
         assert!(matches!(
             FlexibleType::new(&heavy, &[Bond::new(0, 1)]),
-            Err(FlexibleError::Mass { atom: 1, .. })
+            Err(FlexibleError::Molecule(MoleculeError::Mass { atom: 1, .. }))
         ));
         // Three collinear atoms with all three distances bonded: dependent.
         let line = [

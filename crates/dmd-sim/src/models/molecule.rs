@@ -51,6 +51,29 @@ pub enum MoleculeError {
     },
 }
 
+/// The checks every molecule's atoms pass, rigid or not: at least two, masses positive and
+/// finite, positions finite.
+///
+/// # Errors
+/// The first atom that fails, as a [`MoleculeError`].
+pub fn check_atoms(atoms: &[SiteAtom]) -> Result<(), MoleculeError> {
+    if atoms.len() < 2 {
+        return Err(MoleculeError::TooFewAtoms(atoms.len()));
+    }
+    for (k, a) in atoms.iter().enumerate() {
+        if !(a.mass.is_finite() && a.mass > 0.0) {
+            return Err(MoleculeError::Mass {
+                atom: k,
+                mass: a.mass,
+            });
+        }
+        if !a.position.is_finite() {
+            return Err(MoleculeError::Position(k));
+        }
+    }
+    Ok(())
+}
+
 /// A rigid molecule type: atoms in the principal frame, mass, moments, bounding radius.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MoleculeType {
@@ -74,19 +97,8 @@ impl MoleculeType {
     /// [`MoleculeError`] for fewer than two atoms, bad masses or positions, coincident atoms, and
     /// moments `rigid_free` refuses.
     pub fn new(atoms: &[SiteAtom]) -> Result<Self, MoleculeError> {
-        if atoms.len() < 2 {
-            return Err(MoleculeError::TooFewAtoms(atoms.len()));
-        }
+        check_atoms(atoms)?;
         for (k, a) in atoms.iter().enumerate() {
-            if !(a.mass.is_finite() && a.mass > 0.0) {
-                return Err(MoleculeError::Mass {
-                    atom: k,
-                    mass: a.mass,
-                });
-            }
-            if !a.position.is_finite() {
-                return Err(MoleculeError::Position(k));
-            }
             for (l, b) in atoms[..k].iter().enumerate() {
                 if a.position == b.position {
                     return Err(MoleculeError::Coincident(l, k));
@@ -397,14 +409,7 @@ impl CollideBody for SiteBody {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn atom(x: f64, y: f64, z: f64, mass: f64) -> SiteAtom {
-        SiteAtom {
-            position: DVec3::new(x, y, z),
-            mass,
-            species: 0,
-        }
-    }
+    use crate::models::site_pairs::atom;
 
     #[test]
     fn principal_frame_diagonalises_the_inertia_tensor() {

@@ -871,6 +871,16 @@ impl SiteTable {
     }
 }
 
+/// An atom of site species 0 at `(x, y, z)`, for the tests of the site models.
+#[cfg(test)]
+pub(crate) fn atom(x: f64, y: f64, z: f64, mass: f64) -> SiteAtom {
+    SiteAtom {
+        position: DVec3::new(x, y, z),
+        mass,
+        species: 0,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -942,14 +942,7 @@ mod tests {
 mod pair_tests {
     use super::*;
     use crate::engine::pair_state::SiteLevels;
-
-    fn atom(x: f64, y: f64, z: f64, mass: f64) -> SiteAtom {
-        SiteAtom {
-            position: DVec3::new(x, y, z),
-            mass,
-            species: 0,
-        }
-    }
+    use crate::models::site_pairs::atom;
 
     /// Two dumbbells approaching, one tilted and spinning or not: the predicted event (after
     /// the virtual event at the bounding spheres' contact) is the first time two sites touch.

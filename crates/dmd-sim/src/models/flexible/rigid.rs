@@ -228,15 +228,7 @@ fn fit(d: &[DVec3], q: &[DVec3], linear: bool) -> Option<DMat3> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::models::site_pairs::SiteAtom;
-
-    fn atom(x: f64, y: f64, z: f64, mass: f64) -> SiteAtom {
-        SiteAtom {
-            position: DVec3::new(x, y, z),
-            mass,
-            species: 0,
-        }
-    }
+    use crate::models::site_pairs::atom;
 
     #[test]
     fn a_turned_molecule_is_fitted_and_keeps_its_angular_momentum() {
