@@ -205,6 +205,9 @@ pub struct RunRecord {
     pub seconds: (f64, f64),
     /// The model's search counters at the start of production (rods).
     pub search_start: Option<SearchStats>,
+    /// Every count of the model's report at the start of production, by name.
+    #[serde(default)]
+    pub counts_start: std::collections::BTreeMap<String, u64>,
 }
 
 /// The accumulated observables.

@@ -231,6 +231,13 @@ pub struct Summary {
     /// What the RATTLE integration did (only with `bonds`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub rattle: Option<crate::models::flexible::FlexStats>,
+    /// Every count the body model keeps, over production, by name (`search.*`,
+    /// `rattle.*`, `spherocylinders.*`, …): the model's whole report, whichever model it is.
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    pub model_counts: BTreeMap<String, u64>,
+    /// Every real-valued figure the body model keeps, at the end, by name.
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    pub model_figures: BTreeMap<String, f64>,
 }
 
 /// Runs a scene. `base` is the folder relative paths of the scene are read from; with
@@ -1145,7 +1152,12 @@ impl<M: PairModel, Q: Scheduler> StagedRun<M, Q> {
                     p0.to_array(),
                     sim.momentum_scale(),
                 ));
-                self.driver.record.search_start = SearchStats::from_report(&sim.model().report());
+                let report = sim.model().report();
+                self.driver.record.search_start = SearchStats::from_report(&report);
+                self.driver.record.counts_start = report
+                    .counts()
+                    .map(|(name, c)| (name.to_owned(), c))
+                    .collect();
                 self.stage = Stage::Production(match &scene.hmc {
                     Some(h) => Left::Segments(h.segments),
                     None => left_of(self.stop),
@@ -1393,8 +1405,8 @@ impl<M: PairModel, Q: Scheduler> StagedRun<M, Q> {
         };
         let rot_dof = sim.model().rotational_dof();
         let kt_trans = 2.0 * (mean_k - mean_rot) / (dof - rot_dof);
-        let search = sim.model().report();
-        let search = SearchStats::from_report(&search)
+        let report = sim.model().report();
+        let search = SearchStats::from_report(&report)
             .zip(search0)
             .map(|(a, b)| a.since(&b));
         let u = self.built.units;
@@ -1548,6 +1560,17 @@ impl<M: PairModel, Q: Scheduler> StagedRun<M, Q> {
                 .map(|c| hmc_out(c.summary(n as usize), &u)),
             bond_error: sim.model().bond_error_at(sim.now()),
             rattle: crate::models::flexible::FlexStats::from_report(&sim.model().report()),
+            model_counts: report
+                .counts()
+                .map(|(name, c)| {
+                    let before = self.driver.record.counts_start.get(name).copied();
+                    (name.to_owned(), c.saturating_sub(before.unwrap_or(0)))
+                })
+                .collect(),
+            model_figures: report
+                .reals()
+                .map(|(name, x)| (name.to_owned(), x))
+                .collect(),
         };
         Some(summary)
     }

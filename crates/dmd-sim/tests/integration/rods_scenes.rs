@@ -19,6 +19,10 @@ fn assert_healthy(s: &Summary, what: &str) {
     assert_eq!(s.anomalies, 0, "{what}: {:?}", s.anomalies_by_kind);
     assert_eq!(s.detected_misses, 0, "{what}: {:?}", s.search);
     assert!(s.terrace_crossings > 0, "{what}");
+    // The generic report of the model's counters says what the decoded one says.
+    let search = s.search.expect("rods search");
+    assert_eq!(s.model_counts["search.searches"], search.searches, "{what}");
+    assert_eq!(s.model_counts["search.roots"], search.roots, "{what}");
 }
 
 #[test]

@@ -28,6 +28,15 @@ fn low_density_pressure_follows_onsagers_second_virial_coefficient() {
     );
     assert_eq!(s.model, "hard-spherocylinders");
     assert_eq!(s.anomalies, 0, "{:?}", s.anomalies_by_kind);
+    // The model's own counters reach the summary, over production: a prediction per pair
+    // event at least.
+    let predictions = s.model_counts["spherocylinders.predictions"];
+    assert!(
+        predictions >= s.events - s.virtual_events && predictions < 100 * s.events,
+        "{predictions} predictions for {} events: {:?}",
+        s.events,
+        s.model_counts
+    );
     let sigma = s.pressure_error.expect("sampled") / s.pressure_ideal;
     let excess = s.compressibility - 1.0;
     assert!(
