@@ -100,7 +100,8 @@ pub enum Plan {
     Terraced(TerracedPlan),
     /// Rigid site molecules with stepped site–site potentials.
     Sites(site_scene::SitesPlan),
-    /// Semi-flexible molecules (species with `bonds`): RATTLE between events.
+    /// Semi-flexible molecules (species with `bonds`): RATTLE between events; species without
+    /// bonds among them are rigid molecules on their exact free motion.
     Flexible(flexible_scene::FlexiblePlan),
     /// Hard spherocylinders (species with a `shape`): no potential but the hard shells.
     Spherocylinders(SpherocylindersPlan),
