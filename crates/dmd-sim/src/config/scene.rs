@@ -2323,12 +2323,26 @@ fn parse_value(text: &str) -> toml::Value {
 /// # Errors
 /// [`SceneError::Invalid`] naming the key.
 pub(crate) fn check_orientation_keys(init: &InitSpec) -> Result<(), SceneError> {
+    check_orientation_keys_saying(
+        init,
+        "needed by `orientations = \"aligned\"`: the common axis [x, y, z]",
+        "`file` reads the orientation column of `init.file`: it needs `positions = \"file\"`",
+    )
+}
+
+/// [`check_orientation_keys`] with the body kind's words for what the missing axis is
+/// (`axis_needed`) and for what a file's orientations need (`file_needs`).
+///
+/// # Errors
+/// [`SceneError::Invalid`] naming the key.
+pub(crate) fn check_orientation_keys_saying(
+    init: &InitSpec,
+    axis_needed: &str,
+    file_needs: &str,
+) -> Result<(), SceneError> {
     match (init.orientations, init.axis) {
         (Orientations::Aligned, None) => {
-            return Err(SceneError::invalid(
-                "init.axis",
-                "needed by `orientations = \"aligned\"`: the common axis [x, y, z]",
-            ));
+            return Err(SceneError::invalid("init.axis", axis_needed));
         }
         (Orientations::Aligned, Some(a)) => {
             let len = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
@@ -2346,11 +2360,7 @@ pub(crate) fn check_orientation_keys(init: &InitSpec) -> Result<(), SceneError> 
             ));
         }
         (Orientations::File, None) if init.positions != Positions::File => {
-            return Err(SceneError::invalid(
-                "init.orientations",
-                "`file` reads the orientation column of `init.file`: it needs \
-                 `positions = \"file\"`",
-            ));
+            return Err(SceneError::invalid("init.orientations", file_needs));
         }
         _ => {}
     }

@@ -352,45 +352,13 @@ pub(crate) fn check(scene: &Scene) -> Result<(), SceneError> {
             }
         }
     }
-    let init = &scene.init;
-    match (init.orientations, init.axis) {
-        (Orientations::File, Some(_)) => {
-            return Err(SceneError::invalid(
-                "init.axis",
-                "only used with `orientations = \"aligned\"`",
-            ));
-        }
-        (Orientations::File, None) if init.positions != Positions::File => {
-            return Err(SceneError::invalid(
-                "init.orientations",
-                "`file` reads the attitudes of `init.file` (its orientation column or \
-                 particles/orientation chunk): it needs `positions = \"file\"`",
-            ));
-        }
-        (Orientations::File, None) => {}
-        (Orientations::Aligned, None) => {
-            return Err(SceneError::invalid(
-                "init.axis",
-                "needed by `orientations = \"aligned\"`: the common direction [x, y, z] of \
-                 every molecule's first principal axis",
-            ));
-        }
-        (Orientations::Aligned, Some(a)) => {
-            if !DVec3::from(a).is_finite() || DVec3::from(a).length_squared() == 0.0 {
-                return Err(SceneError::invalid(
-                    "init.axis",
-                    format!("must be a nonzero finite vector, got {a:?}"),
-                ));
-            }
-        }
-        (Orientations::Random, Some(_)) => {
-            return Err(SceneError::invalid(
-                "init.axis",
-                "only used with `orientations = \"aligned\"`",
-            ));
-        }
-        (Orientations::Random, None) => {}
-    }
+    crate::config::scene::check_orientation_keys_saying(
+        &scene.init,
+        "needed by `orientations = \"aligned\"`: the common direction [x, y, z] of every \
+         molecule's first principal axis",
+        "`file` reads the attitudes of `init.file` (its orientation column or \
+         particles/orientation chunk): it needs `positions = \"file\"`",
+    )?;
     check_search(scene)?;
     let o = &scene.output;
     if let Some(c) = &o.orientation_acf {
