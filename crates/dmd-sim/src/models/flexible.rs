@@ -335,11 +335,6 @@ impl FlexibleType {
         })
     }
 
-    /// The rigid molecule type, for a species without bonds ([`FlexibleType::rigid`]).
-    pub fn molecule(&self) -> Option<&MoleculeType> {
-        self.rigid.as_deref()
-    }
-
     /// The molecule whose atoms more than `bonds` bonds apart (along the shortest bond path)
     /// interact with each other through their site species' potential, as atoms of different
     /// molecules do (`bonds ≥ 1`: bonded atoms never interact, their distance is held).

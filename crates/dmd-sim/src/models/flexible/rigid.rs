@@ -90,11 +90,6 @@ impl RigidMotion {
         Self::new(ty, t0, o, w)
     }
 
-    /// The molecule type.
-    pub fn molecule(&self) -> &MoleculeType {
-        &self.ty
-    }
-
     /// Orientation (body → lab) and lab angular velocity at `t`.
     #[inline(always)]
     pub fn pose(&self, t: f64) -> (DMat3, DVec3) {
