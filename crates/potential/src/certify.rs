@@ -33,6 +33,18 @@ pub fn interval_containing(intervals: &[(f64, f64)], x: f64) -> Option<(f64, f64
     intervals.iter().copied().find(|&(a, b)| a < x && x < b)
 }
 
+/// The interval of `intervals` that holds `x` to within the round-off margin `1e-8·|x|` that
+/// [`TaylorModel::safe_time`] and [`TaylorModel::monotone`] allow: a pair that has just crossed
+/// onto a terrace sits on an end of its interval, on either side of it by round-off.
+#[inline]
+pub fn interval_near(intervals: &[(f64, f64)], x: f64) -> Option<(f64, f64)> {
+    let margin = 1e-8 * x.abs();
+    intervals
+        .iter()
+        .copied()
+        .find(|&(a, b)| a - margin <= x && x <= b + margin)
+}
+
 /// The free flight of a pair over a window: relative position and velocity of the centres
 /// (`r_ij`, `v_ij = v_i − v_j`) at the window's start, each body's axis there, and its angular
 /// velocity. The axes turn uniformly about their fixed `ω` (a linear rotor, or a sphere) and the
@@ -51,6 +63,14 @@ pub struct FreeFlight {
     pub s_j: DVec3,
     /// Angular velocity of body `j` (constant).
     pub w_j: DVec3,
+    /// `ṡ_i = ω_i × s_i` at the window's start.
+    pub ds_i: DVec3,
+    /// `ṡ_j`.
+    pub ds_j: DVec3,
+    /// `s̈_i = ω_i × ṡ_i` (`−|ω_i|² s_i` for a linear rotor, whose `ω ⟂ s`).
+    pub dds_i: DVec3,
+    /// `s̈_j`.
+    pub dds_j: DVec3,
     /// `Ω ≥ |ω_i| + |ω_j|` (engines keep the rates; [`FreeFlight::new`] computes it).
     pub spin: f64,
 }
@@ -58,6 +78,7 @@ pub struct FreeFlight {
 impl FreeFlight {
     /// The flight of these vectors, with `Ω = |ω_i| + |ω_j|`.
     pub fn new(r: DVec3, v: DVec3, s_i: DVec3, w_i: DVec3, s_j: DVec3, w_j: DVec3) -> Self {
+        let (ds_i, ds_j) = (w_i.cross(s_i), w_j.cross(s_j));
         FreeFlight {
             r,
             v,
@@ -65,6 +86,10 @@ impl FreeFlight {
             w_i,
             s_j,
             w_j,
+            ds_i,
+            ds_j,
+            dds_i: w_i.cross(ds_i),
+            dds_j: w_j.cross(ds_j),
             spin: w_i.length() + w_j.length(),
         }
     }
@@ -108,13 +133,10 @@ impl FreeFlight {
         (r, rd, rdd)
     }
 
-    /// `c = s_i·s_j`, `ċ`, `c̈` at the window's start (`ṡ = ω × s`, `s̈ = ω × ṡ`).
+    /// `c = s_i·s_j`, `ċ`, `c̈` at the window's start.
     #[inline]
     pub fn alignment_derivatives(&self) -> (f64, f64, f64) {
-        let di = self.w_i.cross(self.s_i);
-        let dj = self.w_j.cross(self.s_j);
-        let ddi = self.w_i.cross(di);
-        let ddj = self.w_j.cross(dj);
+        let (di, dj, ddi, ddj) = (self.ds_i, self.ds_j, self.dds_i, self.dds_j);
         (
             self.s_i.dot(self.s_j),
             di.dot(self.s_j) + self.s_i.dot(dj),
@@ -175,6 +197,210 @@ impl TaylorModel {
     }
 }
 
+/// What a [`TaylorModel`] proves while its coordinate moves one way
+/// ([`TaylorModel::monotone`]) or bends one way ([`TaylorModel::convex`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Proof {
+    /// `x` stays inside the interval on `[0, τ]`.
+    Safe(f64),
+    /// `x` crosses the interval's end `end` exactly once in `(0, within)` and stays inside
+    /// before (`x − end` changes sign once there); `guess` is the quadratic model's crossing
+    /// time, a start for refinement.
+    Crossing {
+        /// The end crossed (`a` or `b`).
+        end: f64,
+        /// Whether `x` rises through it (`end = b`).
+        rising: bool,
+        /// A time by which the crossing has certainly happened.
+        within: f64,
+        /// Where the Taylor polynomial crosses `end`.
+        guess: f64,
+        /// A time in `[0, guess]` from which on `x` is inside until the crossing: the lower
+        /// end of the refinement's bracket (0 unless the pair starts on `end`).
+        from: f64,
+    },
+    /// Nothing: `x` may turn within the window, or starts outside the interval.
+    Unknown,
+}
+
+impl TaylorModel {
+    /// What the model proves about `x` in `(a, b)` over `[0, h]` while `x` moves one way.
+    ///
+    /// With `y(τ) = ±(x(τ) − x)` oriented along `ẋ`, `ẏ(τ) ≥ |ẋ| ± ẍτ − Mτ²/2`, which stays
+    /// positive up to the root `τ*` of that parabola: on `[0, min(h, τ*))` (the monotone
+    /// window) `x` moves strictly one way. So the end behind cannot be reached there (a pair
+    /// that has just crossed it onto this terrace, sitting on it up to round-off, is moving
+    /// away), and the end ahead is crossed at most once: never if the upper bound
+    /// `|ẋ|τ ± ẍτ²/2 + Mτ³/6` stays below its distance at the window's end, certainly if the
+    /// lower bound (`− Mτ³/6`) passes it. Where [`safe_time`](Self::safe_time) proves nothing
+    /// (right after a crossing, or a crossing ahead) this proves the way to the next level or
+    /// the level's crossing itself, which then needs no search, only refinement
+    /// (`root_search::monotone_root`).
+    pub fn monotone(&self, a: f64, b: f64, h: f64) -> Proof {
+        let usable = self.x.is_finite()
+            && self.dx.is_finite()
+            && self.ddx.is_finite()
+            && self.third.is_finite()
+            && h > 0.0;
+        if !usable || self.dx == 0.0 {
+            return Proof::Unknown;
+        }
+        let margin = 1e-8 * self.x.abs();
+        let rising = self.dx > 0.0;
+        let (ahead, behind) = if rising { (b, a) } else { (a, b) };
+        let s = if rising { 1.0 } else { -1.0 };
+        // Off the interval behind by more than round-off: not this model's business.
+        if s * (self.x - behind) < -margin {
+            return Proof::Unknown;
+        }
+        let room = s * (ahead - self.x) - margin;
+        if room <= 0.0 {
+            return Proof::Unknown;
+        }
+        let (d1, d2, c3) = (s * self.dx, 0.5 * s * self.ddx, self.third / 6.0);
+        // ẏ ≥ d1 + 2·d2·τ − (M/2)τ² > 0 before τ* = 2·d1 / (√(4d2² + 2M·d1) − 2d2) (the
+        // cancellation-free root; a zero denominator means no root).
+        let denominator = (4.0 * d2 * d2 + 2.0 * self.third * d1).sqrt() - 2.0 * d2;
+        let turn = if denominator > 0.0 {
+            2.0 * d1 / denominator * (1.0 - 1e-9)
+        } else {
+            f64::INFINITY
+        };
+        let window = h.min(turn);
+        if !(window > 0.0) {
+            return Proof::Unknown;
+        }
+        let upper = |t: f64| ((c3 * t + d2) * t + d1) * t;
+        let lower = |t: f64| ((-c3 * t + d2) * t + d1) * t;
+        if upper(window) <= room {
+            return Proof::Safe(window);
+        }
+        if lower(window) >= room + 2.0 * margin {
+            // The quadratic's crossing, cancellation-free; outside the window: its middle.
+            let dist = s * (ahead - self.x);
+            let q = d1 * d1 + 4.0 * d2 * dist;
+            let guess = if q >= 0.0 {
+                2.0 * dist / (d1 + q.sqrt())
+            } else {
+                0.5 * window
+            };
+            return Proof::Crossing {
+                end: ahead,
+                rising,
+                within: window,
+                guess,
+                from: 0.0,
+            };
+        }
+        // Perhaps crossed within the window: safe while the upper bound (increasing on the
+        // window) stays below the distance, to within a halving.
+        let mut t = 0.5 * window;
+        for _ in 0..6 {
+            if upper(t) <= room {
+                return Proof::Safe(t);
+            }
+            t *= 0.5;
+        }
+        Proof::Unknown
+    }
+
+    /// What the model proves about `x` in `(a, b)` over `[0, h]` while `x` bends one way: the
+    /// case of a turn, where [`monotone`](Self::monotone) proves little.
+    ///
+    /// With `σ` the sign of `ẍ`, `σẍ(τ) ≥ |ẍ| − Mτ > 0` up to `|ẍ|/M`: on that window `σx` is
+    /// strictly convex, so `{σx < σe}` is an interval and the end `e` that `ẍ` bends towards
+    /// (`b` for `σ > 0`) is crossed at most once, and not at all if the convex upper bound
+    /// `σ(x − e) + σẋτ + |ẍ|τ²/2 + Mτ³/6` stays negative. The other end is safe while the
+    /// tangent `x + ẋτ` (which `σx` lies above) has not reached it. A pair that has just
+    /// crossed onto a terrace and turns back at once (a grazing return) gets its crossing
+    /// proven, and located, this way.
+    pub fn convex(&self, a: f64, b: f64, h: f64) -> Proof {
+        let usable = self.x.is_finite()
+            && self.dx.is_finite()
+            && self.ddx.is_finite()
+            && self.third.is_finite()
+            && h > 0.0;
+        if !usable || self.ddx == 0.0 {
+            return Proof::Unknown;
+        }
+        let margin = 1e-8 * self.x.abs();
+        let rising = self.ddx > 0.0;
+        let (ahead, behind) = if rising { (b, a) } else { (a, b) };
+        let s = if rising { 1.0 } else { -1.0 };
+        // y = σ(x − ahead): negative inside (with the margin), crossing zero at the event. A
+        // pair on that end (y within round-off of 0, just crossed onto the terrace) must be
+        // moving in: it comes back, and the crossing is its return.
+        let y0 = s * (self.x - ahead);
+        let (d1, d2, c3) = (s * self.dx, 0.5 * s * self.ddx, self.third / 6.0);
+        let on_end = y0 >= -margin;
+        if (on_end && (y0 > margin || d1 >= 0.0)) || s * (self.x - behind) < -margin {
+            return Proof::Unknown;
+        }
+        let bend = if self.third > 0.0 {
+            2.0 * d2 / self.third * (1.0 - 1e-9)
+        } else {
+            f64::INFINITY
+        };
+        let mut window = h.min(bend);
+        // The end behind: σx ≥ σx₀ + σẋτ (convexity), so moving away from it (d1 ≥ 0) is safe
+        // and moving towards it is safe while the tangent keeps off it.
+        if d1 < 0.0 {
+            let room_behind = s * (self.x - behind) - margin;
+            window = window.min(room_behind / -d1);
+        }
+        if !(window > 0.0) {
+            return Proof::Unknown;
+        }
+        let upper = |t: f64| y0 + ((c3 * t + d2) * t + d1) * t;
+        let lower = |t: f64| y0 + ((-c3 * t + d2) * t + d1) * t;
+        // The convex upper bound stays below max(y0, upper(t)) on [0, t]: below the round-off
+        // margin (a pair on the end stays within it until it is inside).
+        if upper(window) <= -margin {
+            return Proof::Safe(window);
+        }
+        if lower(window) >= margin {
+            // The quadratic's later crossing of zero (the one after the turn, if any).
+            let q = d1 * d1 - 4.0 * d2 * y0;
+            let guess = if q >= 0.0 {
+                (q.sqrt() - d1) / (2.0 * d2)
+            } else {
+                0.5 * window
+            };
+            // A pair on the end: from a time at which it is proven inside, where the upper
+            // bound dips below the margin (near the quadratic's turn), there is one crossing.
+            let from = if on_end {
+                let turn = (-d1 / (2.0 * d2)).min(window);
+                match [turn, 0.5 * turn, 0.5 * (turn + guess.min(window))]
+                    .into_iter()
+                    .find(|&t| t > 0.0 && upper(t) <= -margin)
+                {
+                    Some(t) => t,
+                    None => return Proof::Unknown,
+                }
+            } else {
+                0.0
+            };
+            return Proof::Crossing {
+                end: ahead,
+                rising,
+                within: window,
+                guess,
+                from,
+            };
+        }
+        // The upper bound is convex and starts below zero: below it up to the last halving
+        // found below.
+        let mut t = 0.5 * window;
+        for _ in 0..6 {
+            if upper(t) <= -margin {
+                return Proof::Safe(t);
+            }
+            t *= 0.5;
+        }
+        Proof::Unknown
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -227,5 +453,172 @@ mod tests {
         assert_eq!(m.safe_time(0.5, 10.0, 0.25), 0.125);
         assert_eq!(m.safe_time(0.49, 10.0, 0.25), 0.25);
         assert_eq!(m.safe_time(1.0, 2.0, 1.0), 0.0);
+    }
+
+    /// A coordinate with known derivatives and a third derivative within the bound: the
+    /// cubic `x + ẋτ + ẍτ²/2 + w·Mτ³/6`, `|w| ≤ 1`. What `monotone` and `convex` prove holds
+    /// on a fine grid: a safe stretch stays inside, a crossing happens once, before `within`,
+    /// and the other end is never reached before it.
+    #[test]
+    fn monotone_proofs_hold_on_cubics() {
+        let mut state = 0x9e37_79b9_7f4a_7c15_u64;
+        let mut uniform = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (mut safe, mut crossing) = (0, 0);
+        for _ in 0..20_000 {
+            let (a, b) = (-1.0 - 2.0 * uniform(), 0.2 + 2.0 * uniform());
+            // Starts anywhere inside, or on an end (just after a crossing).
+            let x = match (uniform() * 4.0) as u32 {
+                0 => a,
+                1 => b,
+                _ => a + (b - a) * uniform(),
+            };
+            let m = TaylorModel {
+                x,
+                dx: 8.0 * (uniform() - 0.5),
+                ddx: 20.0 * (uniform() - 0.5),
+                third: 60.0 * uniform(),
+            };
+            let w = 2.0 * uniform() - 1.0;
+            let h = 2.0 * uniform();
+            let f = |t: f64| m.x + m.dx * t + 0.5 * m.ddx * t * t + w * m.third * t * t * t / 6.0;
+            let convex = uniform() < 0.5;
+            let proof = if convex {
+                m.convex(a, b, h)
+            } else {
+                m.monotone(a, b, h)
+            };
+            match proof {
+                Proof::Safe(tau) => {
+                    safe += 1;
+                    assert!(tau > 0.0 && tau <= h);
+                    for k in 1..=400 {
+                        let y = f(tau * k as f64 / 400.0);
+                        let tol = 1e-12;
+                        // Never out through the end ahead; the end behind at most by round-off.
+                        assert!(
+                            y > a - tol && y < b + tol,
+                            "{m:?} w {w} left ({a}, {b}) by {y}"
+                        );
+                        let towards = if convex { m.ddx } else { m.dx };
+                        if towards > 0.0 {
+                            assert!(y < b);
+                        } else {
+                            assert!(y > a);
+                        }
+                    }
+                }
+                Proof::Crossing {
+                    end,
+                    rising,
+                    within,
+                    guess: _,
+                    from,
+                } => {
+                    crossing += 1;
+                    let s = if rising { 1.0 } else { -1.0 };
+                    assert!(within > 0.0 && within <= h);
+                    assert_eq!(rising, if convex { m.ddx > 0.0 } else { m.dx > 0.0 });
+                    assert_eq!(end, if rising { b } else { a });
+                    assert!(s * (f(within) - end) > 0.0, "not crossed by {within}");
+                    assert!((0.0..within).contains(&from));
+                    assert!(s * (f(from) - end) < 0.0, "not inside at {from}");
+                    let mut crossings = 0;
+                    let mut before = false;
+                    for k in 1..=400 {
+                        let y = f(from + (within - from) * k as f64 / 400.0);
+                        let now = s * (y - end) > 0.0;
+                        crossings += usize::from(now != before);
+                        before = now;
+                        if crossings == 0 {
+                            assert!(y > a - 1e-12 && y < b + 1e-12, "{m:?} w {w} left early");
+                        }
+                    }
+                    assert_eq!(crossings, 1, "{m:?} w {w}");
+                }
+                Proof::Unknown => {}
+            }
+        }
+        assert!(
+            safe > 1000 && crossing > 1000,
+            "{safe} safe, {crossing} crossings"
+        );
+    }
+
+    /// A pair that has just crossed up onto its terrace and turns straight back: no monotone
+    /// window reaches the return, the convex one proves and locates it.
+    #[test]
+    fn a_grazing_return_is_located_by_convexity() {
+        let m = TaylorModel {
+            x: 1.0 + 1e-6,
+            dx: 1e-3,
+            ddx: -2.0,
+            third: 1.0,
+        };
+        assert!(matches!(m.monotone(1.0, 2.0, 0.1), Proof::Safe(t) if t < 1e-3));
+        let Proof::Crossing {
+            end,
+            rising,
+            within,
+            guess,
+            from,
+        } = m.convex(1.0, 2.0, 0.1)
+        else {
+            panic!("{:?}", m.convex(1.0, 2.0, 0.1));
+        };
+        assert_eq!((end, rising, within, from), (1.0, false, 0.1, 0.0));
+        // x = 1 + 1e-6 + 1e-3 τ − τ² (M = 1 adds at most τ³/6): back at 1 at τ ≈ 1.6e-3.
+        let exact = (1e-3 + (1e-6 + 4e-6f64).sqrt()) / 2.0;
+        assert!((guess - exact).abs() < 1e-12, "{guess} against {exact}");
+        // Starting on the level itself: the return is the crossing, bracketed from a time
+        // at which the pair is proven inside.
+        let on = TaylorModel { x: 1.0, ..m };
+        assert!(matches!(on.monotone(1.0, 2.0, 0.1), Proof::Safe(t) if t < 1e-3));
+        let Proof::Crossing {
+            end, guess, from, ..
+        } = on.convex(1.0, 2.0, 0.1)
+        else {
+            panic!("{:?}", on.convex(1.0, 2.0, 0.1));
+        };
+        assert_eq!(end, 1.0);
+        assert!(
+            from > 0.0 && from < guess && (guess - 1e-3).abs() < 1e-12,
+            "{from} {guess}"
+        );
+    }
+
+    #[test]
+    fn monotone_goes_nowhere_without_a_direction() {
+        let m = TaylorModel {
+            x: 0.5,
+            dx: 0.0,
+            ddx: 1.0,
+            third: 1.0,
+        };
+        assert_eq!(m.monotone(0.0, 1.0, 1.0), Proof::Unknown);
+        // Leaving the interval behind it: unknown, not safe.
+        let m = TaylorModel {
+            x: -0.1,
+            dx: 1.0,
+            ddx: 0.0,
+            third: 0.0,
+        };
+        assert_eq!(m.monotone(0.0, 1.0, 1.0), Proof::Unknown);
+        // Moving straight up from the lower end: safe to 1 (exactly reaches b at 1: not safe),
+        // crossing certain beyond.
+        let m = TaylorModel {
+            x: 0.0,
+            dx: 1.0,
+            ddx: 0.0,
+            third: 0.0,
+        };
+        assert_eq!(m.monotone(0.0, 1.0, 0.5), Proof::Safe(0.5));
+        assert!(
+            matches!(m.monotone(0.0, 1.0, 2.0), Proof::Crossing { end, guess, .. } if end == 1.0 && guess == 1.0)
+        );
     }
 }

@@ -125,6 +125,21 @@ impl LinearRotor {
         self.s0 * c + self.v0 * s
     }
 
+    /// The unit axis at time `t` and its velocity `ds/dt = ω × s(t)`, from one sine and cosine:
+    /// with `ω ⟂ s`, `ω̂ × s(t) = v₀ cos ωt − s₀ sin ωt`. Certified prediction needs both (and
+    /// `d²s/dt² = −|ω|² s`), without the cross products of the general rotation.
+    #[inline(always)]
+    pub fn axis_and_velocity(&self, t: f64) -> (DVec3, DVec3) {
+        if t == 0.0 {
+            return (self.s0, self.v0 * self.rate);
+        }
+        let (s, c) = crate::trig::sin_cos(self.rate * t);
+        (
+            self.s0 * c + self.v0 * s,
+            (self.v0 * c - self.s0 * s) * self.rate,
+        )
+    }
+
     /// `ds/dt = ω × s(t)`.
     #[inline]
     pub fn axis_velocity(&self, t: f64) -> DVec3 {
@@ -135,6 +150,19 @@ impl LinearRotor {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn axis_velocity_from_one_sine_matches_the_cross_product() {
+        let rod = LinearRotor::new(DVec3::new(0.3, -0.5, 0.8), DVec3::new(2.0, 1.0, -0.7)).unwrap();
+        for t in [0.0, 1e-9, 0.37, 5.0, -2.0] {
+            let (s, ds) = rod.axis_and_velocity(t);
+            assert_eq!(s, rod.axis(t));
+            assert!(
+                (ds - rod.axis_velocity(t)).length() < 1e-14 * rod.rate(),
+                "{t}"
+            );
+        }
+    }
 
     #[test]
     fn spin_is_dropped_and_axis_stays_unit() {

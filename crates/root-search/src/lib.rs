@@ -14,6 +14,8 @@
 //!   `Copy`) that a *virtual event* (000 §III.B) keeps until it resumes the search exactly;
 //! - [`sphere_window`], the analytic times at which a linearly moving centre distance enters
 //!   and leaves the interaction sphere, which bracket each search;
+//! - [`monotone_root`], the root of a function proven monotone on a bracket (by a certificate
+//!   from outside the crate), where refinement alone suffices;
 //! - [`corpus`], adversarial indicators with known roots that test any method.
 //!
 //! Every call reports how many times it evaluated the indicator. Searches ask for a crossing
@@ -68,6 +70,7 @@ pub use bracket::{SphereWindow, sphere_window};
 pub use error::SearchError;
 pub use grid::Grid;
 pub use indicator::{Crossing, Direction, Indicator};
+pub use refine::monotone_root;
 pub use search::{Method, Outcome, Report, Root, SearchState};
 pub use tolerance::Tolerances;
 

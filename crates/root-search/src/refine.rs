@@ -196,3 +196,102 @@ mod tests {
         assert!((r - 0.123).abs() < 1e-12);
     }
 }
+
+/// The root of `g` in `[lo, hi]` when `g(lo) < 0 < g(hi)` and `g` is known to change sign
+/// only once there (a certificate such as a Taylor model's monotone or convex window proves
+/// it): then no grazing can hide another root, so no search is needed, only refinement. Newton–Raphson from `guess`, every iterate kept inside the
+/// shrinking bracket (bisection when a step would leave it, as 000 §III.A demands of Newton
+/// results), until a step is below `tol` plus round-off of `t`. `g` returns `(g(t), g'(t))`.
+///
+/// Returns the root and the number of evaluations of `g`.
+pub fn monotone_root<G: FnMut(f64) -> (f64, f64)>(
+    mut g: G,
+    lo: f64,
+    hi: f64,
+    guess: f64,
+    tol: f64,
+) -> (f64, u32) {
+    let (mut lo, mut hi) = (lo, hi);
+    let mut t = if guess > lo && guess < hi {
+        guess
+    } else {
+        0.5 * (lo + hi)
+    };
+    let mut evaluations = 0;
+    // Each step at least halves the bracket or is a Newton step inside it: 200 bounds any
+    // bracket of doubles.
+    for _ in 0..200 {
+        let (f, df) = g(t);
+        evaluations += 1;
+        if f == 0.0 {
+            return (t, evaluations);
+        }
+        if f < 0.0 {
+            lo = t;
+        } else {
+            hi = t;
+        }
+        let newton = t - f / df;
+        let next = if df > 0.0 && newton > lo && newton < hi {
+            newton
+        } else {
+            0.5 * (lo + hi)
+        };
+        if (next - t).abs() <= tol + 2.0 * f64::EPSILON * t.abs() || hi - lo <= tol {
+            return (next.clamp(lo, hi), evaluations);
+        }
+        t = next;
+    }
+    (t, evaluations)
+}
+
+#[cfg(test)]
+mod monotone_tests {
+    use super::monotone_root;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// Any strictly increasing function with a sign change in the bracket: the root is
+        /// found to the tolerance, from any guess, in few evaluations when Newton applies.
+        #[test]
+        fn finds_the_one_root(
+            root in -5.0f64..5.0,
+            a in 0.1f64..10.0,
+            c in 0.0f64..3.0,
+            left in 1e-6f64..4.0,
+            right in 1e-6f64..4.0,
+            guess in -10.0f64..10.0,
+        ) {
+            // g = a·(t − r) + c·(t − r)³: increasing, one root at r.
+            let g = |t: f64| {
+                let d = t - root;
+                (a * d + c * d * d * d, a + 3.0 * c * d * d)
+            };
+            let (t, n) = monotone_root(g, root - left, root + right, guess, 1e-12);
+            prop_assert!((t - root).abs() <= 1e-9, "{t} against {root}");
+            prop_assert!(n <= 200);
+        }
+    }
+
+    #[test]
+    fn newton_from_a_close_guess_takes_a_few_steps() {
+        let g = |t: f64| (t.exp() - 2.0, t.exp());
+        let (t, n) = monotone_root(g, 0.0, 1.0, 0.7, 1e-14);
+        assert!((t - 2f64.ln()).abs() < 1e-14);
+        assert!(n <= 4, "{n} evaluations");
+    }
+
+    #[test]
+    fn a_flat_stretch_falls_back_on_bisection() {
+        // g' = 0 on the left part: Newton cannot step, bisection still converges.
+        let g = |t: f64| {
+            if t < 0.5 {
+                (-1.0, 0.0)
+            } else {
+                (t - 0.75, 1.0)
+            }
+        };
+        let (t, _) = monotone_root(g, 0.0, 1.0, 0.1, 1e-13);
+        assert!((t - 0.75).abs() < 1e-12);
+    }
+}

@@ -49,11 +49,11 @@ use collide::{Outcome, PairForce, Velocity, terrace};
 use glam::{DQuat, DVec3};
 use potential::{
     FreeFlight, PairEval, PairGeometry, PairPotential, PotentialError, RigidGeometry,
-    RigidPairPotential, TaylorModel, TerraceMap,
+    RigidPairPotential, TaylorModel, TerraceMap, certify::Proof,
 };
 use rand_xoshiro::Xoshiro256PlusPlus;
 use rigid_free::LinearRotor;
-use root_search::{Adaptive, Crossing, Grid, Method, SearchError, SearchState};
+use root_search::{Adaptive, Crossing, Grid, Method, SearchError, SearchState, monotone_root};
 
 use crate::engine::event::{Boundary, Kind};
 use crate::engine::hash::mix;
@@ -152,13 +152,18 @@ impl<P: PairPotential> TerracedPotential for P {
         (rj, tj): (&LinearRotor, f64),
         h: f64,
     ) -> Option<TaylorModel> {
+        let ((s_i, ds_i), (s_j, ds_j)) = (ri.axis_and_velocity(ti), rj.axis_and_velocity(tj));
         let flight = FreeFlight {
             r,
             v,
-            s_i: ri.axis(ti),
+            s_i,
             w_i: ri.omega(),
-            s_j: rj.axis(tj),
+            s_j,
             w_j: rj.omega(),
+            ds_i,
+            ds_j,
+            dds_i: s_i * -(ri.rate() * ri.rate()),
+            dds_j: s_j * -(rj.rate() * rj.rate()),
             spin: ri.rate() + rj.rate(),
         };
         PairPotential::taylor_model(self, &flight, h)
@@ -433,11 +438,26 @@ enum Pending {
     Search { at: f64, end: f64 },
 }
 
+/// A level crossing that Taylor models located: from `at`, the coordinate crosses `end` once
+/// within `within` (`potential::certify::Proof::Crossing`).
+#[derive(Clone, Copy, Debug)]
+struct Located {
+    at: f64,
+    end: f64,
+    rising: bool,
+    within: f64,
+    guess: f64,
+    from: f64,
+}
+
 /// Certified prediction from `t` towards `limit`: Taylor models of the potential's effective
 /// coordinate along `flight`, each proving a stretch in which `U` stays inside `band`
-/// (`potential::certify`). Stops at `limit`, when a model proves less than `min_jump` (a
-/// crossing may be near: the root search takes over), or after 32 models. Returns the time
-/// reached and the models evaluated (0 for a potential without a model).
+/// (`potential::certify`), by the model's safe time or, where that proves little (on a level
+/// just crossed, or a level ahead), by its monotone window, or at a turn by its convex one. Stops at `limit`, at a crossing the
+/// monotone window proves (returned: it needs refinement, not a search), when a model proves
+/// less than `min_jump` (a crossing may be near: the root search takes over), or after 32
+/// models. Returns the time reached, the models evaluated (0 for a potential without a
+/// model) and the located crossing, if any.
 #[inline]
 fn certified_jump(
     band: &Band,
@@ -445,7 +465,7 @@ fn certified_jump(
     mut t: f64,
     limit: f64,
     min_jump: f64,
-) -> (f64, u64) {
+) -> (f64, u64, Option<Located>) {
     let mut models = 0;
     let mut ends: Option<(f64, f64)> = None;
     while t < limit && models < 32 {
@@ -456,12 +476,43 @@ fn certified_jump(
         models += 1;
         // The interval that holds the pair (none: off its band, so prove nothing).
         let Some((a, b)) =
-            ends.or_else(|| potential::certify::interval_containing(&band.coordinate, m.x))
+            ends.or_else(|| potential::certify::interval_near(&band.coordinate, m.x))
         else {
             break;
         };
         ends = Some((a, b));
-        let tau = m.safe_time(a, b, h);
+        let mut tau = m.safe_time(a, b, h);
+        if tau < h {
+            let mut proof = m.monotone(a, b, h);
+            if matches!(proof, Proof::Safe(s) if tau.max(s) < min_jump) || proof == Proof::Unknown {
+                // Turning (the monotone window ends at once): the curvature may prove more.
+                proof = match m.convex(a, b, h) {
+                    Proof::Unknown => proof,
+                    other => other,
+                };
+            }
+            match proof {
+                Proof::Safe(s) => tau = tau.max(s),
+                Proof::Crossing {
+                    end,
+                    rising,
+                    within,
+                    guess,
+                    from,
+                } => {
+                    let located = Located {
+                        at: t,
+                        end,
+                        rising,
+                        within,
+                        guess,
+                        from,
+                    };
+                    return (t, models, Some(located));
+                }
+                Proof::Unknown => {}
+            }
+        }
         if tau >= h {
             t = limit;
             break;
@@ -471,7 +522,29 @@ fn certified_jump(
         }
         t += tau;
     }
-    (t, models)
+    (t, models, None)
+}
+
+/// Which level of `band` a pair reaches at a root `t` (centres `r` apart then): the one its
+/// energy there is nearer to.
+#[inline]
+fn boundary_at<P: TerracedPotential>(
+    band: &Band,
+    pot: &P,
+    clamp: f64,
+    (ri, rj): (&Anchored<P::Rotor>, &Anchored<P::Rotor>),
+    r: DVec3,
+    t: f64,
+) -> Boundary {
+    if band.inv_width == 0.0 {
+        return Boundary::Inner;
+    }
+    let u = pot.energy(r, &ri.pose(t), &rj.pose(t)).min(clamp);
+    if u > 0.5 * (band.lo + band.hi) {
+        Boundary::Inner
+    } else {
+        Boundary::Outer
+    }
 }
 
 /// Validation mode: searches `[from, to]` of a pair on `band` again on the fine `grid` (every
@@ -774,14 +847,47 @@ impl<P: TerracedPotential> Terraced<P> {
                     h,
                 )
             };
-            let (t, models) = certified_jump(
+            let (t, models, located) = certified_jump(
                 &band,
-                model_at,
+                &model_at,
                 t_start,
                 limit,
-                0.05 * self.settings.max_step,
+                1e-3 * self.settings.max_step,
             );
             self.stats.taylor_models += models;
+            if let Some(c) = located {
+                // One crossing, proven monotone: refine it on the coordinate itself (a model
+                // at each iterate, counted as one) instead of searching `U`.
+                let sign = if c.rising { 1.0 } else { -1.0 };
+                let coordinate = |tau: f64| match model_at(c.at + tau, 0.0) {
+                    Some(m) => (sign * (m.x - c.end), sign * m.dx),
+                    None => (f64::NAN, f64::NAN),
+                };
+                let tol = 1e-10 * self.settings.max_step;
+                let (tau, evaluations) = monotone_root(coordinate, c.from, c.within, c.guess, tol);
+                self.stats.taylor_models += u64::from(evaluations);
+                let root = c.at + tau;
+                if root > t_start {
+                    self.stats.certified_jumps += 1;
+                }
+                if let Some(grid) = self.verify {
+                    let tol = 1e-6 * self.settings.max_step;
+                    if let Some(tg) =
+                        verify_stretch(grid, &pair_at, &band, t_start, root, tol, &mut self.stats)
+                    {
+                        debug_miss(&pair_at, t_start, root, || {
+                            format!(
+                                "missed by a located crossing: pair ({i}, {j}) terrace {k} \
+                                 {band:?} from {t_start} to {root}, fine grid root at {tg}"
+                            )
+                        });
+                    }
+                }
+                self.stats.roots += 1;
+                let boundary =
+                    boundary_at(&band, pot, clamp, (ri, rj), dr + dv * (root - now), root);
+                return Some((root - now, Kind::Pair(boundary)));
+            }
             if t > t_start {
                 self.stats.certified_jumps += 1;
                 // The jumped stretch, searched on the fine grid like any search interval.
@@ -914,17 +1020,7 @@ impl<P: TerracedPotential> Terraced<P> {
         match report.outcome {
             root_search::Outcome::Root(r) => {
                 self.stats.roots += 1;
-                let boundary = if band.inv_width == 0.0 {
-                    Boundary::Inner
-                } else {
-                    let (a, b) = (ri.pose(r.t), rj.pose(r.t));
-                    let u = pot.energy(dr + dv * (r.t - now), &a, &b).min(clamp);
-                    if u > 0.5 * (band.lo + band.hi) {
-                        Boundary::Inner
-                    } else {
-                        Boundary::Outer
-                    }
-                };
+                let boundary = boundary_at(&band, pot, clamp, (ri, rj), dr + dv * (r.t - now), r.t);
                 Some((r.t - now, Kind::Pair(boundary)))
             }
             root_search::Outcome::Suspended(s) => {

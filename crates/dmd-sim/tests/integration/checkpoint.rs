@@ -480,18 +480,32 @@ trajectory = { interval = 0.05 }
 plots = false
 "#;
 
+/// With certified prediction (jumps and located crossings, no root search) and without it
+/// (root searches suspended and resumed by virtual events).
 #[test]
 fn a_resumed_rods_run_is_bit_identical() {
-    let straight = dir("rods-straight");
-    let a = run(RODS, &[], &straight, &options(RODS, &[], None, false)).unwrap();
-    assert!(a.search.is_some_and(|s| s.searches > 0), "{:?}", a.search);
+    resumed_rods_run_is_bit_identical(RODS, "rods", |s| s.certified_jumps > 0 && s.roots > 0);
+    let searched = format!("{RODS}\n[search]\nhorizon = 0\n");
+    resumed_rods_run_is_bit_identical(&searched, "rods-searched", |s| {
+        s.searches > 0 && s.suspended > 0
+    });
+}
+
+fn resumed_rods_run_is_bit_identical(
+    text: &str,
+    name: &str,
+    used: impl Fn(&dmd_sim::search::SearchStats) -> bool,
+) {
+    let straight = dir(&format!("{name}-straight"));
+    let a = run(text, &[], &straight, &options(text, &[], None, false)).unwrap();
+    assert!(a.search.as_ref().is_some_and(&used), "{:?}", a.search);
     assert!(a.terrace_crossings > 100, "{}", a.terrace_crossings);
-    let crashed = dir("rods-crashed");
+    let crashed = dir(&format!("{name}-crashed"));
     let e = run(
-        RODS,
+        text,
         &[],
         &crashed,
-        &options(RODS, &[], Some(Every::Events(3000)), true),
+        &options(text, &[], Some(Every::Events(3000)), true),
     )
     .unwrap_err();
     assert!(matches!(e, RunError::Halted));
