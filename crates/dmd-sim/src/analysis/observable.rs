@@ -12,6 +12,7 @@ use glam::DVec3;
 use crate::analysis::block::{BlockEstimate, Blocks};
 use crate::analysis::output::{CsvStream, OutputError};
 use crate::analysis::pairs::{for_each_pair, wrap};
+use crate::analysis::site_rdf::{MoleculeSites, SiteRdf};
 use crate::engine::simulation::{Sampler, View};
 
 /// Radial distribution function `g(r)` of all pairs, and for bodies of two or more species
@@ -45,6 +46,9 @@ pub struct Rdf {
     /// The current configuration's counts (scratch, kept to save an allocation a sample).
     #[serde(skip)]
     scratch: Vec<u64>,
+    /// The site–site g(r) of rigid molecules with named sites, in the same bins and at the
+    /// same samples (`None` for bodies without them).
+    sites: Option<SiteRdf>,
 }
 
 /// Index of the unordered pair of species `a ≤ b` among `kinds` species: `(0,0), (0,1), …,
@@ -92,7 +96,26 @@ impl Rdf {
             partial_blocks: Vec::new(),
             blocks: vec![Blocks::default(); bins],
             scratch: Vec::new(),
+            sites: None,
         }
+    }
+
+    /// The same g(r), and with it the site–site g(r) of molecules whose species (in the
+    /// scene's order) have the named sites `species`: the samples then need the bodies'
+    /// attitudes ([`needs_attitudes`](Self::needs_attitudes)).
+    pub fn with_sites(mut self, species: Vec<MoleculeSites>) -> Self {
+        self.sites = Some(SiteRdf::new(species, self.counts.len(), self.r_max));
+        self
+    }
+
+    /// Whether the samples must carry the bodies' attitudes (for the site–site g(r)).
+    pub fn needs_attitudes(&self) -> bool {
+        self.sites.is_some()
+    }
+
+    /// The site–site g(r), if the bodies have named sites.
+    pub fn sites(&self) -> Option<&SiteRdf> {
+        self.sites.as_ref()
     }
 
     fn sample(&mut self, view: &View<'_>) {
@@ -105,6 +128,13 @@ impl Rdf {
             .map(|i| wrap(view.position(i), view.lengths))
             .collect();
         let species: Vec<u32> = view.bodies.iter().map(|b| b.species).collect();
+        if let Some(s) = &mut self.sites {
+            // A view without attitudes is a run that did not ask for them: its site table
+            // stays empty (zeros), which the end-to-end tests would show.
+            if view.attitudes.len() == n {
+                s.accumulate(&pos, &species, &view.attitudes, view.lengths);
+            }
+        }
         self.accumulate(&pos, &species, view.lengths);
     }
 
