@@ -22,7 +22,8 @@ use crate::engine::simulation::{Sampler, View};
 /// ideal gas at the same density; `g_aa(r)` against `N_a (N_a − 1) / 2` and `g_ab(r)` (`a ≠
 /// b`) against `N_a N_b`, so every one tends to 1 at large `r` in an ideal mixture and
 /// `g = Σ_a N_a (N_a − 1) g_aa / (N (N − 1)) + Σ_{a<b} 2 N_a N_b g_ab / (N (N − 1))` holds bin
-/// by bin.
+/// by bin. Molecules with named sites also get the site–site g(r) in the same bins
+/// ([`with_sites`](Self::with_sites), [`SiteRdf`]).
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct Rdf {
     every: u64,

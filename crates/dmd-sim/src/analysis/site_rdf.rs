@@ -13,7 +13,7 @@
 use glam::{DQuat, DVec3};
 
 use crate::analysis::block::Blocks;
-use crate::analysis::pairs::for_each_pair;
+use crate::analysis::pairs::{for_each_pair, wrap};
 
 /// The named sites of a rigid molecule species: each site's name (its type; sites of one
 /// name on any species count as one type) and its offset from the centre in the body frame
@@ -140,17 +140,8 @@ impl SiteRdf {
         pairs
     }
 
-    /// The longest arm of any site from its centre (length).
-    fn arm(&self) -> f64 {
-        self.species
-            .iter()
-            .flat_map(|s| &s.offsets)
-            .map(|o| o.length())
-            .fold(0.0, f64::max)
-    }
-
-    /// Adds the site pairs of one configuration: centres wrapped into the box `l`, the
-    /// species and the body → lab attitude of each molecule.
+    /// Adds the site pairs of one configuration: the centres in the box `l`, the species and
+    /// the body → lab attitude of each molecule.
     pub(crate) fn accumulate(
         &mut self,
         pos: &[DVec3],
@@ -165,47 +156,31 @@ impl SiteRdf {
         }
         self.volume = l.x * l.y * l.z;
         self.samples += 1;
-        // Each molecule's sites: lab offsets and types, from `first[i]` on.
+        // Every site in the box, with its molecule and type.
         let types: Vec<Vec<usize>> = (0..self.species.len())
             .map(|s| self.site_types(s))
             .collect();
-        let mut first = Vec::with_capacity(pos.len() + 1);
-        let mut arms = Vec::new();
+        let mut sites = Vec::new();
+        let mut owner = Vec::new();
         let mut kinds = Vec::new();
-        first.push(0);
-        for (i, (&s, q)) in species.iter().zip(attitudes).enumerate() {
+        for (i, ((&s, q), &c)) in species.iter().zip(attitudes).zip(pos).enumerate() {
             let s = s as usize;
-            arms.extend(self.species[s].offsets.iter().map(|&o| *q * o));
-            kinds.extend_from_slice(&types[s]);
-            first.push(first[i] + types[s].len());
+            for (&o, &t) in self.species[s].offsets.iter().zip(&types[s]) {
+                sites.push(wrap(c + *q * o, l));
+                owner.push(i);
+                kinds.push(t);
+            }
         }
         let mut counts = std::mem::take(&mut self.scratch);
         counts.clear();
         counts.resize(self.counts.len(), 0);
-        let r2max = self.r_max * self.r_max;
         let inv_w = 1.0 / self.width;
-        let half = 0.5 * l;
-        // Two sites closer than r_max belong to molecules whose centres are closer than r_max
-        // plus both arms; each site pair is then taken at its own minimum image.
-        for_each_pair(pos, l, self.r_max + 2.0 * self.arm(), |i, j, d| {
-            for u in first[i]..first[i + 1] {
-                for w in first[j]..first[j + 1] {
-                    let mut s = d + arms[u] - arms[w];
-                    for a in 0..3 {
-                        while s[a] > half[a] {
-                            s[a] -= l[a];
-                        }
-                        while s[a] < -half[a] {
-                            s[a] += l[a];
-                        }
-                    }
-                    let r2 = s.length_squared();
-                    if r2 < r2max {
-                        let bin = (r2.sqrt() * inv_w) as usize;
-                        if bin < bins {
-                            counts[type_pair(kinds[u], kinds[w], k) * bins + bin] += 1;
-                        }
-                    }
+        // The sites' own cell list: the same cut-off, so the same cells, as the centres' g(r).
+        for_each_pair(&sites, l, self.r_max, |u, w, d| {
+            if owner[u] != owner[w] {
+                let bin = (d.length() * inv_w) as usize;
+                if bin < bins {
+                    counts[type_pair(kinds[u], kinds[w], k) * bins + bin] += 1;
                 }
             }
         });
