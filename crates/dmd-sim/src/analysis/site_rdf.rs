@@ -367,10 +367,10 @@ mod tests {
 
     /// An ideal gas of randomly placed and turned molecules: every g_ab is 1 within its
     /// noise at every r (intramolecular pairs left out of count and normalisation alike),
-    /// with the cell list (a big box) and without it.
+    /// with the cell list (a box of three cells of r_max and more) and without it (fewer).
     #[test]
     fn an_ideal_gas_of_molecules_gives_one() {
-        for side in [14.0, 30.0] {
+        for side in [11.0, 30.0] {
             let l = DVec3::splat(side);
             let n = (0.02 * side * side * side) as usize;
             let mut rng = rand_xoshiro::Xoshiro256PlusPlus::seed_from_u64(3);
