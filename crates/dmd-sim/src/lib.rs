@@ -57,7 +57,7 @@ mod driver;
 mod engine;
 mod models;
 
-pub use analysis::{block, observable, output, reference, smooth};
+pub use analysis::{block, observable, output, reference, site_rdf, smooth};
 pub use config::{
     flexible_scene, init, kinds, limits, plan, rods, scene, site_scene, smd_spec,
     spherocylinder_scene, units,

@@ -7,4 +7,5 @@ pub mod observable;
 pub mod output;
 pub(crate) mod pairs;
 pub mod reference;
+pub mod site_rdf;
 pub mod smooth;

@@ -12,6 +12,7 @@ use glam::DVec3;
 use crate::analysis::block::{BlockEstimate, Blocks};
 use crate::analysis::output::{CsvStream, OutputError};
 use crate::analysis::pairs::{for_each_pair, wrap};
+use crate::analysis::site_rdf::{MoleculeSites, SiteRdf};
 use crate::engine::simulation::{Sampler, View};
 
 /// Radial distribution function `g(r)` of all pairs, and for bodies of two or more species
@@ -21,7 +22,8 @@ use crate::engine::simulation::{Sampler, View};
 /// ideal gas at the same density; `g_aa(r)` against `N_a (N_a − 1) / 2` and `g_ab(r)` (`a ≠
 /// b`) against `N_a N_b`, so every one tends to 1 at large `r` in an ideal mixture and
 /// `g = Σ_a N_a (N_a − 1) g_aa / (N (N − 1)) + Σ_{a<b} 2 N_a N_b g_ab / (N (N − 1))` holds bin
-/// by bin.
+/// by bin. Molecules with named sites also get the site–site g(r) in the same bins
+/// ([`with_sites`](Self::with_sites), [`SiteRdf`]).
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct Rdf {
     every: u64,
@@ -45,6 +47,9 @@ pub struct Rdf {
     /// The current configuration's counts (scratch, kept to save an allocation a sample).
     #[serde(skip)]
     scratch: Vec<u64>,
+    /// The site–site g(r) of rigid molecules with named sites, in the same bins and at the
+    /// same samples (`None` for bodies without them).
+    sites: Option<SiteRdf>,
 }
 
 /// Index of the unordered pair of species `a ≤ b` among `kinds` species: `(0,0), (0,1), …,
@@ -92,7 +97,26 @@ impl Rdf {
             partial_blocks: Vec::new(),
             blocks: vec![Blocks::default(); bins],
             scratch: Vec::new(),
+            sites: None,
         }
+    }
+
+    /// The same g(r), and with it the site–site g(r) of molecules whose species (in the
+    /// scene's order) have the named sites `species`: the samples then need the bodies'
+    /// attitudes ([`needs_attitudes`](Self::needs_attitudes)).
+    pub fn with_sites(mut self, species: Vec<MoleculeSites>) -> Self {
+        self.sites = Some(SiteRdf::new(species, self.counts.len(), self.r_max));
+        self
+    }
+
+    /// Whether the samples must carry the bodies' attitudes (for the site–site g(r)).
+    pub fn needs_attitudes(&self) -> bool {
+        self.sites.is_some()
+    }
+
+    /// The site–site g(r), if the bodies have named sites.
+    pub fn sites(&self) -> Option<&SiteRdf> {
+        self.sites.as_ref()
     }
 
     fn sample(&mut self, view: &View<'_>) {
@@ -105,6 +129,13 @@ impl Rdf {
             .map(|i| wrap(view.position(i), view.lengths))
             .collect();
         let species: Vec<u32> = view.bodies.iter().map(|b| b.species).collect();
+        if let Some(s) = &mut self.sites {
+            // A view without attitudes is a run that did not ask for them: its site table
+            // stays empty (zeros), which the end-to-end tests would show.
+            if view.attitudes.len() == n {
+                s.accumulate(&pos, &species, &view.attitudes, view.lengths);
+            }
+        }
         self.accumulate(&pos, &species, view.lengths);
     }
 

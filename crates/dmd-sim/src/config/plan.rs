@@ -12,6 +12,7 @@ use collide::Particle;
 use glam::{DQuat, DVec3};
 
 use crate::analysis::output::Drawing;
+use crate::analysis::site_rdf::MoleculeSites;
 use crate::analysis::smooth::Evaluate;
 use crate::config::init::{
     Configuration, FileMolecules, MoleculeShape, read_attitudes, read_molecules, rod_semi_axes,
@@ -339,6 +340,33 @@ impl Plan {
                     .map(|s| [s.inertia, s.inertia, 0.0])
                     .collect(),
             },
+        }
+    }
+
+    /// The named sites of each species for the site–site g(r) of `output.rdf`: tops of a
+    /// kind with several sites (SPC/E: O, H, H), and rigid site molecules (their sites named
+    /// by their site kinds); `None` for bodies without named sites in a rigid frame (spheres,
+    /// rods, tops of one site such as SSD/E, semi-flexible molecules, spherocylinders).
+    pub fn sites(&self, scene: &Scene) -> Option<Vec<MoleculeSites>> {
+        match self {
+            Plan::Terraced(t) => {
+                let sites = t.spec.describe().sites()?;
+                Some(vec![sites; scene.species.len()])
+            }
+            Plan::Sites(p) => Some(
+                p.types
+                    .iter()
+                    .map(|t| MoleculeSites {
+                        names: t
+                            .site_species()
+                            .iter()
+                            .map(|&k| p.kinds[k as usize].clone())
+                            .collect(),
+                        offsets: t.sites().to_vec(),
+                    })
+                    .collect(),
+            ),
+            Plan::Spheres(_) | Plan::Flexible(_) | Plan::Spherocylinders(_) => None,
         }
     }
 

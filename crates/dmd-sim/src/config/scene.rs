@@ -19,6 +19,7 @@ use serde::{Deserialize, Deserializer};
 
 use crate::analysis::output::Drawing;
 use crate::analysis::output::given;
+use crate::analysis::site_rdf::MoleculeSites;
 
 /// The scene format this version of `dmd` reads.
 pub const FORMAT_VERSION: u32 = 1;
@@ -603,6 +604,12 @@ pub trait Describe {
     }
     /// The unit system the parameters are given in, if the kind has one.
     fn units(&self) -> Option<UnitSystem> {
+        None
+    }
+    /// The named interaction sites of a body of several sites, in the frame of its attitude
+    /// (the site–site g(r) of `output.rdf`); `None` for a body of one site at its centre,
+    /// whose centre g(r) is already the site–site one.
+    fn sites(&self) -> Option<MoleculeSites> {
         None
     }
 }

@@ -46,7 +46,7 @@ use crate::models::search::SearchStats;
 /// First bytes of every checkpoint.
 pub const MAGIC: &[u8; 8] = b"\x89DMD-CK\n";
 /// The layout version this `dmd` writes and reads.
-pub const FORMAT_VERSION: u32 = 7;
+pub const FORMAT_VERSION: u32 = 8;
 /// The `dmd` version written into checkpoints.
 pub const CODE_VERSION: &str = env!("CARGO_PKG_VERSION");
 /// The checkpoint's file name in the output folder.
@@ -429,12 +429,29 @@ pub fn check_observers(
         };
         let sampled_ok = samples == 0
             || (num(&s, "n") == Some(n) && s.get("volume").and_then(Value::as_f64) == Some(volume));
+        // The site–site g(r): the same sites and bins, its arrays of the sizes they give.
+        let sites = |v: &Value| {
+            v.get("sites").filter(|x| !x.is_null()).map(|x| {
+                (
+                    ["species", "types", "r_max", "width", "bins"].map(|k| x.get(k).cloned()),
+                    len(x, "counts"),
+                    len(x, "blocks"),
+                )
+            })
+        };
+        let sites_ok = match (sites(&s), sites(&f)) {
+            (Some((keys_s, counts, blocks)), Some((keys_f, fresh, _))) => {
+                keys_s == keys_f && counts == fresh && blocks == fresh
+            }
+            (a, b) => a.is_none() && b.is_none(),
+        };
         if !(same(&s, &f, &["every", "r_max", "width"])
             && len(&s, "counts") == Some(bins)
             && len(&s, "partial") == Some(partial)
             && len(&s, "partial_blocks") == Some(partial)
             && members_ok
             && sampled_ok
+            && sites_ok
             && num(&s, "seen").is_some_and(|seen| seen >= samples))
         {
             return Err("its g(r) does not fit the scene's output.rdf and bodies".into());

@@ -16,6 +16,8 @@ pub const FILES: &[&str] = &[
     "trajectory.gsd",
     "rdf.csv",
     "rdf.svg",
+    "rdf-sites.csv",
+    "rdf-sites.svg",
     "msd.csv",
     "msd.svg",
     "vacf.csv",

@@ -233,7 +233,8 @@ fn block_mean(x: &[f64]) -> Option<(f64, Option<f64>)> {
     Some((b.mean, b.error.is_finite().then_some(b.error)))
 }
 
-/// One observable's table, as its CSV file holds it: `rdf`, `msd`, `vacf`, `oacf` or `series`,
+/// One observable's table, as its CSV file holds it: `rdf`, `rdf-sites`, `msd`, `vacf`, `oacf`
+/// or `series`,
 /// its column names and its rows (in the scene's units).
 #[derive(Clone, Debug, PartialEq)]
 pub struct ObservableTable {
@@ -364,6 +365,39 @@ fn observables(
                 curves,
             )),
         )?;
+        // The site–site g(r) of molecules with named sites, in a file of its own: rdf.csv
+        // keeps the centres, and the sites' names cannot clash with its species' columns.
+        if let Some(sites) = rdf.sites() {
+            let partials = sites.partials();
+            let mut header = strings(&["r"]);
+            let mut rows: Vec<Vec<f64>> = partials
+                .first()
+                .map_or(&[][..], |p| &p.rows[..])
+                .iter()
+                .map(|&(r, _)| vec![r])
+                .collect();
+            let mut curves = Vec::new();
+            for p in partials {
+                header.push(format!("g_{}_{}", p.a, p.b));
+                header.push(format!("g_{}_{}_error", p.a, p.b));
+                for ((row, &(_, g)), &e) in rows.iter_mut().zip(&p.rows).zip(&p.errors) {
+                    row.push(g);
+                    row.push(e);
+                }
+                curves.push(Line::new(format!("g {}–{}", p.a, p.b), p.rows).with_errors(p.errors));
+            }
+            table(
+                "rdf-sites",
+                &header,
+                rows,
+                Some(plot(
+                    "Site–site radial distribution functions",
+                    format!("r ({})", au.length),
+                    "g(r)".to_owned(),
+                    curves,
+                )),
+            )?;
+        }
     }
     if let Some(c) = &obs.correlations {
         if c.wants_msd() {

@@ -17,6 +17,7 @@ use crate::analysis::observable::{Correlations, Observers, Rdf, Series};
 use crate::analysis::output::{
     GsdTrajectory, Layout, OutputError, Trajectory, element_of, write_atomically, write_csv,
 };
+use crate::analysis::site_rdf::MoleculeSites;
 use crate::config::init::{
     Configuration, ase_momentum_unit, lattice, maxwell_boltzmann, read_motion, read_xyz,
 };
@@ -449,6 +450,7 @@ fn set_up<G: Go>(
         check_checkpoint_scene(scene, path, c)?;
     }
     let layout = layout_of(scene, &plan, &units);
+    let sites = plan.sites(scene);
     let start_file = base.join(scene.init.file.as_deref().unwrap_or(Path::new("")));
     // Semi-flexible molecules start from a file of their atoms (or of their centres).
     let molecules = match (&options.resume, scene.init.positions) {
@@ -573,6 +575,7 @@ fn set_up<G: Go>(
         options,
         smooth: std::cell::Cell::new(None),
         layout,
+        sites,
         set_up_only,
     };
     if fault > 0.0 {
@@ -652,6 +655,8 @@ struct Context<'a> {
     smooth: std::cell::Cell<Option<Box<dyn crate::analysis::smooth::Evaluate>>>,
     /// How trajectory frames draw each species.
     layout: Layout,
+    /// The named sites of each species, for the site–site g(r) ([`Plan::sites`]).
+    sites: Option<Vec<MoleculeSites>>,
     /// Stop with [`RunError::SetUpOnly`] once the simulation and its outputs' sizes are set up.
     set_up_only: bool,
 }
@@ -891,6 +896,7 @@ impl Context<'_> {
                 moments: self.layout.moments.clone(),
             },
             layout: self.layout.clone(),
+            sites: self.sites.clone(),
             lengths: self.config.lengths,
             body_species: self.config.species.clone(),
             out: self.out.map(Path::to_owned),
@@ -936,6 +942,8 @@ pub struct StagedRun<M: PairModel, Q: Scheduler> {
     scene: Scene,
     built: Built,
     layout: Layout,
+    /// The named sites of each species, for the site–site g(r) ([`Plan::sites`]).
+    sites: Option<Vec<MoleculeSites>>,
     lengths: DVec3,
     body_species: Vec<u32>,
     out: Option<std::path::PathBuf>,
@@ -1043,7 +1051,11 @@ impl<M: PairModel, Q: Scheduler> StagedRun<M, Q> {
         let resumed = self.resumed_production.take();
         if let Some(rdf) = &o.rdf {
             let r_max = rdf_r_max(scene, lengths)?;
-            observers.rdf = Some(Rdf::new(rdf.bins as usize, r_max, rdf.every));
+            let g = Rdf::new(rdf.bins as usize, r_max, rdf.every);
+            observers.rdf = Some(match &self.sites {
+                Some(sites) => g.with_sites(sites.clone()),
+                None => g,
+            });
         }
         if o.msd.is_some() || o.vacf.is_some() || o.orientation_acf.is_some() {
             let lag = o
@@ -1183,6 +1195,9 @@ impl<M: PairModel, Q: Scheduler> StagedRun<M, Q> {
                 observers.correlations = c.correlations;
                 observers.samples = c.samples;
             }
+        }
+        if observers.rdf.as_ref().is_some_and(Rdf::needs_attitudes) {
+            self.sim.set_sample_attitudes(true);
         }
         if let Some(c) = &mut self.driver.chain
             && scene.hmc.is_some()

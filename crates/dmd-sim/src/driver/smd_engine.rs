@@ -595,7 +595,17 @@ impl Job<'_> {
         let mut observers = Observers::default();
         let lengths = self.config.lengths;
         if let Some(rdf) = &o.rdf {
-            observers.rdf = Some(Rdf::new(rdf.bins as usize, rdf_r_max, rdf.every));
+            let g = Rdf::new(rdf.bins as usize, rdf_r_max, rdf.every);
+            // One species: the sites of the potential's kind, as the event-driven engine's
+            // plan gives them.
+            let sites = scene.pair[0]
+                .potential
+                .as_ref()
+                .and_then(|p| p.describe().sites());
+            observers.rdf = Some(match sites {
+                Some(s) => g.with_sites(vec![s]),
+                None => g,
+            });
         }
         let interval = self.sample_every as f64 * self.settings.dt;
         if o.msd.is_some() || o.vacf.is_some() || o.orientation_acf.is_some() {
@@ -900,6 +910,20 @@ impl Bridge<'_> {
     }
 }
 
+/// The bodies' attitudes: tops' own; rods' as the terraced model gives them (body z along the
+/// axis `axes`), so that both engines write the same orientation column.
+fn attitudes_of(s: &Snapshot<'_>, axes: &[DVec3]) -> Vec<DQuat> {
+    if s.system.orientations().is_empty() {
+        axes.iter().map(|&a| axis_quaternion(a)).collect()
+    } else {
+        s.system
+            .orientations()
+            .iter()
+            .map(|r| DQuat::from_mat3(r).normalize())
+            .collect()
+    }
+}
+
 impl Observer for Bridge<'_> {
     fn sample(&mut self, s: &Snapshot<'_>) {
         // Trapezoids of ∫W dt and ∫K dt: the event-driven engine's Σ r·Δp is ∫W dt.
@@ -925,21 +949,19 @@ impl Observer for Bridge<'_> {
         let frame = self.frame_every > 0 && step.is_multiple_of(self.frame_every);
         if sample || frame {
             let mut observers = std::mem::take(&mut self.observers);
-            let view = self.view(s);
+            let mut view = self.view(s);
             if sample {
+                // The site–site g(r) places the sites by the attitudes.
+                if observers.rdf.as_ref().is_some_and(Rdf::needs_attitudes) {
+                    view.attitudes = attitudes_of(s, &view.axes);
+                }
                 observers.sample(&view);
             }
             if frame {
-                // Tops: their attitudes; rods: as the terraced model gives them (body z along
-                // the axis), so that both engines write the same orientation column.
-                let attitudes = if s.system.orientations().is_empty() {
-                    view.axes.iter().map(|&a| axis_quaternion(a)).collect()
+                let attitudes = if view.attitudes.is_empty() {
+                    attitudes_of(s, &view.axes)
                 } else {
-                    s.system
-                        .orientations()
-                        .iter()
-                        .map(|r| DQuat::from_mat3(r).normalize())
-                        .collect()
+                    std::mem::take(&mut view.attitudes)
                 };
                 let spins = s.system.angular_momenta().to_vec();
                 observers.frame(

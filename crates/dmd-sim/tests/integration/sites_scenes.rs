@@ -72,6 +72,21 @@ fn the_hard_dumbbells_scene_runs_and_its_pressure_is_that_of_dumbbells() {
         .collect();
     assert!((rows[0][1] - 1.0).abs() < 1e-9, "{:?}", rows[0]);
     assert!(rows.last().unwrap()[1] < 0.9, "{:?}", rows.last());
+    // The site–site g(r) of the sites of kind A: no pair of sites of two molecules inside the
+    // hard core (σ = 1, the bins of 0.02 below it), the molecule's own pair at 0.6 σ left
+    // out, and the contact peak in the first bin beyond it.
+    let text = std::fs::read_to_string(dir.join("rdf-sites.csv")).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("r,g_A_A,g_A_A_error"));
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|x| x.trim().parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), 150);
+    for r in rows.iter().filter(|r| r[0] + 0.01 < 0.999) {
+        assert_eq!(r[1], 0.0, "{r:?}");
+    }
+    let contact = rows.iter().find(|r| r[0] > 1.0).unwrap();
+    assert!(contact[1] > 1.5, "{contact:?}");
     std::fs::remove_dir_all(&dir).ok();
 }
 

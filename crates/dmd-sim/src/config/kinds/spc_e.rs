@@ -11,6 +11,7 @@ use potential::{RigidPairPotential, SiteSite};
 
 use super::Kind;
 use crate::analysis::output::Drawing;
+use crate::analysis::site_rdf::MoleculeSites;
 use crate::config::rods::{pair_terraces, plain_terrace_map, potential_error};
 use crate::config::scene::{
     Body, Describe, PotentialSpec, SceneError, SpcESpec, TerraceSpec, UnitSystem, non_negative,
@@ -108,6 +109,14 @@ impl Describe for SpcESpec {
     }
     fn smd_dt(&self) -> Option<f64> {
         Some(SPC_E_DT)
+    }
+    /// The oxygen and the two hydrogens at the model's geometry, in the body frame of
+    /// [`spc_e_sites`].
+    fn sites(&self) -> Option<MoleculeSites> {
+        Some(MoleculeSites {
+            names: ["O", "H", "H"].map(str::to_owned).to_vec(),
+            offsets: spc_e_sites().iter().map(|s| s.position).collect(),
+        })
     }
     fn units(&self) -> Option<UnitSystem> {
         Some(UnitSystem::Molecular)
