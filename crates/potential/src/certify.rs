@@ -267,7 +267,7 @@ impl TaylorModel {
             f64::INFINITY
         };
         let window = h.min(turn);
-        if !(window > 0.0) {
+        if window.is_nan() || window <= 0.0 {
             return Proof::Unknown;
         }
         let upper = |t: f64| ((c3 * t + d2) * t + d1) * t;
@@ -348,7 +348,7 @@ impl TaylorModel {
             let room_behind = s * (self.x - behind) - margin;
             window = window.min(room_behind / -d1);
         }
-        if !(window > 0.0) {
+        if window.is_nan() || window <= 0.0 {
             return Proof::Unknown;
         }
         let upper = |t: f64| y0 + ((c3 * t + d2) * t + d1) * t;

@@ -849,7 +849,7 @@ impl<P: TerracedPotential> Terraced<P> {
             };
             let (t, models, located) = certified_jump(
                 &band,
-                &model_at,
+                model_at,
                 t_start,
                 limit,
                 1e-3 * self.settings.max_step,
