@@ -203,27 +203,71 @@ impl TaylorModel {
 pub enum Proof {
     /// `x` stays inside the interval on `[0, τ]`.
     Safe(f64),
-    /// `x` crosses the interval's end `end` exactly once in `(0, within)` and stays inside
-    /// before (`x − end` changes sign once there); `guess` is the quadratic model's crossing
-    /// time, a start for refinement.
-    Crossing {
-        /// The end crossed (`a` or `b`).
-        end: f64,
-        /// Whether `x` rises through it (`end = b`).
-        rising: bool,
-        /// A time by which the crossing has certainly happened.
-        within: f64,
-        /// Where the Taylor polynomial crosses `end`.
-        guess: f64,
-        /// A time in `[0, guess]` from which on `x` is inside until the crossing: the lower
-        /// end of the refinement's bracket (0 unless the pair starts on `end`).
-        from: f64,
-    },
+    /// `x` crosses an end of the interval once, located ([`Crossing`]).
+    Crossing(Crossing),
     /// Nothing: `x` may turn within the window, or starts outside the interval.
     Unknown,
 }
 
+/// A crossing a [`Proof`] locates: `x` crosses the interval's end `end` exactly once in
+/// `(from, within)` and stays inside before (`x − end` changes sign once there), so it needs
+/// refinement, not a search.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Crossing {
+    /// The end crossed (`a` or `b`).
+    pub end: f64,
+    /// Whether `x` rises through it (`end = b`).
+    pub rising: bool,
+    /// A time by which the crossing has certainly happened.
+    pub within: f64,
+    /// Where the Taylor polynomial crosses `end`: a start for refinement.
+    pub guess: f64,
+    /// A time in `[0, guess]` from which on `x` is inside until the crossing: the lower end
+    /// of the refinement's bracket (0 unless the pair starts on `end`).
+    pub from: f64,
+}
+
+/// A model oriented along the sign of one of its derivatives ([`TaylorModel::oriented`]):
+/// `y = s·(x − x₀)` has `ẏ = d1`, `ÿ = 2·d2` and `|y⃛| ≤ 6·c3`.
+struct Oriented {
+    rising: bool,
+    s: f64,
+    ahead: f64,
+    behind: f64,
+    margin: f64,
+    d1: f64,
+    d2: f64,
+    c3: f64,
+}
+
 impl TaylorModel {
+    /// The model oriented along the sign of `rate` (`ẋ` or `ẍ`), with the round-off margin
+    /// `1e-8·|x|` of [`safe_time`](Self::safe_time); none for an unusable model or a zero
+    /// `rate`.
+    #[inline]
+    fn oriented(&self, rate: f64, a: f64, b: f64, h: f64) -> Option<Oriented> {
+        let usable = self.x.is_finite()
+            && self.dx.is_finite()
+            && self.ddx.is_finite()
+            && self.third.is_finite()
+            && h > 0.0;
+        if !usable || rate == 0.0 {
+            return None;
+        }
+        let rising = rate > 0.0;
+        let s = if rising { 1.0 } else { -1.0 };
+        Some(Oriented {
+            rising,
+            s,
+            ahead: if rising { b } else { a },
+            behind: if rising { a } else { b },
+            margin: 1e-8 * self.x.abs(),
+            d1: s * self.dx,
+            d2: 0.5 * s * self.ddx,
+            c3: self.third / 6.0,
+        })
+    }
+
     /// What the model proves about `x` in `(a, b)` over `[0, h]` while `x` moves one way.
     ///
     /// With `y(τ) = ±(x(τ) − x)` oriented along `ẋ`, `ẏ(τ) ≥ |ẋ| ± ẍτ − Mτ²/2`, which stays
@@ -237,18 +281,19 @@ impl TaylorModel {
     /// the level's crossing itself, which then needs no search, only refinement
     /// (`root_search::monotone_root`).
     pub fn monotone(&self, a: f64, b: f64, h: f64) -> Proof {
-        let usable = self.x.is_finite()
-            && self.dx.is_finite()
-            && self.ddx.is_finite()
-            && self.third.is_finite()
-            && h > 0.0;
-        if !usable || self.dx == 0.0 {
+        let Some(Oriented {
+            rising,
+            s,
+            ahead,
+            behind,
+            margin,
+            d1,
+            d2,
+            c3,
+        }) = self.oriented(self.dx, a, b, h)
+        else {
             return Proof::Unknown;
-        }
-        let margin = 1e-8 * self.x.abs();
-        let rising = self.dx > 0.0;
-        let (ahead, behind) = if rising { (b, a) } else { (a, b) };
-        let s = if rising { 1.0 } else { -1.0 };
+        };
         // Off the interval behind by more than round-off: not this model's business.
         if s * (self.x - behind) < -margin {
             return Proof::Unknown;
@@ -257,7 +302,6 @@ impl TaylorModel {
         if room <= 0.0 {
             return Proof::Unknown;
         }
-        let (d1, d2, c3) = (s * self.dx, 0.5 * s * self.ddx, self.third / 6.0);
         // ẏ ≥ d1 + 2·d2·τ − (M/2)τ² > 0 before τ* = 2·d1 / (√(4d2² + 2M·d1) − 2d2) (the
         // cancellation-free root; a zero denominator means no root).
         let denominator = (4.0 * d2 * d2 + 2.0 * self.third * d1).sqrt() - 2.0 * d2;
@@ -284,24 +328,17 @@ impl TaylorModel {
             } else {
                 0.5 * window
             };
-            return Proof::Crossing {
+            return Proof::Crossing(Crossing {
                 end: ahead,
                 rising,
                 within: window,
                 guess,
                 from: 0.0,
-            };
+            });
         }
         // Perhaps crossed within the window: safe while the upper bound (increasing on the
         // window) stays below the distance, to within a halving.
-        let mut t = 0.5 * window;
-        for _ in 0..6 {
-            if upper(t) <= room {
-                return Proof::Safe(t);
-            }
-            t *= 0.5;
-        }
-        Proof::Unknown
+        last_halving(window, |t| upper(t) <= room)
     }
 
     /// What the model proves about `x` in `(a, b)` over `[0, h]` while `x` bends one way: the
@@ -315,23 +352,23 @@ impl TaylorModel {
     /// crossed onto a terrace and turns back at once (a grazing return) gets its crossing
     /// proven, and located, this way.
     pub fn convex(&self, a: f64, b: f64, h: f64) -> Proof {
-        let usable = self.x.is_finite()
-            && self.dx.is_finite()
-            && self.ddx.is_finite()
-            && self.third.is_finite()
-            && h > 0.0;
-        if !usable || self.ddx == 0.0 {
+        let Some(Oriented {
+            rising,
+            s,
+            ahead,
+            behind,
+            margin,
+            d1,
+            d2,
+            c3,
+        }) = self.oriented(self.ddx, a, b, h)
+        else {
             return Proof::Unknown;
-        }
-        let margin = 1e-8 * self.x.abs();
-        let rising = self.ddx > 0.0;
-        let (ahead, behind) = if rising { (b, a) } else { (a, b) };
-        let s = if rising { 1.0 } else { -1.0 };
+        };
         // y = σ(x − ahead): negative inside (with the margin), crossing zero at the event. A
         // pair on that end (y within round-off of 0, just crossed onto the terrace) must be
         // moving in: it comes back, and the crossing is its return.
         let y0 = s * (self.x - ahead);
-        let (d1, d2, c3) = (s * self.dx, 0.5 * s * self.ddx, self.third / 6.0);
         let on_end = y0 >= -margin;
         if (on_end && (y0 > margin || d1 >= 0.0)) || s * (self.x - behind) < -margin {
             return Proof::Unknown;
@@ -380,25 +417,32 @@ impl TaylorModel {
             } else {
                 0.0
             };
-            return Proof::Crossing {
+            return Proof::Crossing(Crossing {
                 end: ahead,
                 rising,
                 within: window,
                 guess,
                 from,
-            };
+            });
         }
         // The upper bound is convex and starts below zero: below it up to the last halving
         // found below.
-        let mut t = 0.5 * window;
-        for _ in 0..6 {
-            if upper(t) <= -margin {
-                return Proof::Safe(t);
-            }
-            t *= 0.5;
-        }
-        Proof::Unknown
+        last_halving(window, |t| upper(t) <= -margin)
     }
+}
+
+/// The largest of `w/2, w/4, …, w/64` at which `safe` holds, as a safe stretch (the callers'
+/// bounds make every shorter time safe too), or nothing.
+#[inline]
+fn last_halving(window: f64, safe: impl Fn(f64) -> bool) -> Proof {
+    let mut t = 0.5 * window;
+    for _ in 0..6 {
+        if safe(t) {
+            return Proof::Safe(t);
+        }
+        t *= 0.5;
+    }
+    Proof::Unknown
 }
 
 #[cfg(test)]
@@ -512,13 +556,13 @@ mod tests {
                         }
                     }
                 }
-                Proof::Crossing {
+                Proof::Crossing(Crossing {
                     end,
                     rising,
                     within,
                     guess: _,
                     from,
-                } => {
+                }) => {
                     crossing += 1;
                     let s = if rising { 1.0 } else { -1.0 };
                     assert!(within > 0.0 && within <= h);
@@ -560,13 +604,13 @@ mod tests {
             third: 1.0,
         };
         assert!(matches!(m.monotone(1.0, 2.0, 0.1), Proof::Safe(t) if t < 1e-3));
-        let Proof::Crossing {
+        let Proof::Crossing(Crossing {
             end,
             rising,
             within,
             guess,
             from,
-        } = m.convex(1.0, 2.0, 0.1)
+        }) = m.convex(1.0, 2.0, 0.1)
         else {
             panic!("{:?}", m.convex(1.0, 2.0, 0.1));
         };
@@ -578,9 +622,9 @@ mod tests {
         // at which the pair is proven inside.
         let on = TaylorModel { x: 1.0, ..m };
         assert!(matches!(on.monotone(1.0, 2.0, 0.1), Proof::Safe(t) if t < 1e-3));
-        let Proof::Crossing {
+        let Proof::Crossing(Crossing {
             end, guess, from, ..
-        } = on.convex(1.0, 2.0, 0.1)
+        }) = on.convex(1.0, 2.0, 0.1)
         else {
             panic!("{:?}", on.convex(1.0, 2.0, 0.1));
         };
@@ -618,7 +662,7 @@ mod tests {
         };
         assert_eq!(m.monotone(0.0, 1.0, 0.5), Proof::Safe(0.5));
         assert!(
-            matches!(m.monotone(0.0, 1.0, 2.0), Proof::Crossing { end, guess, .. } if end == 1.0 && guess == 1.0)
+            matches!(m.monotone(0.0, 1.0, 2.0), Proof::Crossing(Crossing { end, guess, .. }) if end == 1.0 && guess == 1.0)
         );
     }
 }
