@@ -11,7 +11,7 @@ use glam::DVec3;
 
 use crate::analysis::block::{BlockEstimate, Blocks};
 use crate::analysis::output::{CsvStream, OutputError};
-use crate::analysis::pairs::{for_each_pair, wrap};
+use crate::analysis::pairs::{for_each_pair, pair_index, ratio, shell_volume, wrap};
 use crate::analysis::site_rdf::{MoleculeSites, SiteRdf};
 use crate::engine::simulation::{Sampler, View};
 
@@ -71,12 +71,6 @@ pub(crate) fn msd_fit(t: &[(f64, f64)]) -> Option<(f64, f64)> {
         let b = sxy / sxx;
         (my - b * mx, b)
     })
-}
-
-fn pair_index(a: usize, b: usize, kinds: usize) -> usize {
-    let (a, b) = if a <= b { (a, b) } else { (b, a) };
-    // The pairs (i, ·) with i < a come first: k + (k − 1) + … + (k − a + 1) of them.
-    a * (2 * kinds + 1 - a) / 2 + (b - a)
 }
 
 impl Rdf {
@@ -220,8 +214,7 @@ impl Rdf {
 
     /// Volume of the shell of bin `k`.
     fn shell_volume(&self, k: usize) -> f64 {
-        let (a, b) = (k as f64 * self.width, (k + 1) as f64 * self.width);
-        4.0 / 3.0 * std::f64::consts::PI * (b * b * b - a * a * a)
+        shell_volume(self.width, k)
     }
 
     /// The block-average error of `g(r)` in every bin (the rows of [`table`](Self::table)),
@@ -300,15 +293,6 @@ pub struct PartialRdf {
     pub rows: Vec<(f64, f64)>,
     /// The block-average error of each row, as [`Rdf::errors`].
     pub errors: Vec<f64>,
-}
-
-/// `count / ideal`, 0 where the ideal count is 0 (a species of one body, an empty shell).
-fn ratio(count: u64, ideal: f64) -> f64 {
-    if ideal > 0.0 {
-        count as f64 / ideal
-    } else {
-        0.0
-    }
 }
 
 /// One time origin of the correlations.

@@ -1,5 +1,6 @@
 //! The pairs of a sampled configuration: one cell-list loop over every pair within a distance
-//! at the minimum image, shared by g(r) and the smooth estimators.
+//! at the minimum image, shared by g(r) and the smooth estimators, and the binning the g(r)s of
+//! centres and of sites share.
 
 use glam::DVec3;
 
@@ -116,4 +117,26 @@ pub(crate) fn wrap(p: DVec3, l: DVec3) -> DVec3 {
         p.y.rem_euclid(l.y),
         p.z.rem_euclid(l.z),
     )
+}
+
+/// Index of the unordered pair of kinds `a ≤ b` among `kinds`: `(0,0), (0,1), …, (1,1), …`.
+pub(crate) fn pair_index(a: usize, b: usize, kinds: usize) -> usize {
+    let (a, b) = if a <= b { (a, b) } else { (b, a) };
+    // The pairs (i, ·) with i < a come first: k + (k − 1) + … + (k − a + 1) of them.
+    a * (2 * kinds + 1 - a) / 2 + (b - a)
+}
+
+/// Volume of the shell of bin `k` of bins `width` wide from 0.
+pub(crate) fn shell_volume(width: f64, k: usize) -> f64 {
+    let (a, b) = (k as f64 * width, (k + 1) as f64 * width);
+    4.0 / 3.0 * std::f64::consts::PI * (b * b * b - a * a * a)
+}
+
+/// `count / ideal`, 0 where the ideal count is 0 (a species of one body, an empty shell).
+pub(crate) fn ratio(count: u64, ideal: f64) -> f64 {
+    if ideal > 0.0 {
+        count as f64 / ideal
+    } else {
+        0.0
+    }
 }

@@ -13,7 +13,7 @@
 use glam::{DQuat, DVec3};
 
 use crate::analysis::block::Blocks;
-use crate::analysis::pairs::{for_each_pair, wrap};
+use crate::analysis::pairs::{for_each_pair, pair_index, ratio, shell_volume, wrap};
 
 /// The named sites of a rigid molecule species: each site's name (its type; sites of one
 /// name on any species count as one type) and its offset from the centre in the body frame
@@ -37,7 +37,7 @@ pub struct SiteRdf {
     r_max: f64,
     width: f64,
     bins: usize,
-    /// Counts of every pair of types ([`type_pair`]), `bins` each.
+    /// Counts of every pair of types ([`pair_index`]), `bins` each.
     counts: Vec<u64>,
     /// Each bin's `g_ab` of every evaluated configuration, blocked in sample order (laid out
     /// as `counts`).
@@ -62,12 +62,6 @@ pub struct SitePairRdf {
     pub rows: Vec<(f64, f64)>,
     /// The block-average error of each row (NaN with fewer than 16 configurations).
     pub errors: Vec<f64>,
-}
-
-/// Index of the unordered pair of types `a ≤ b` among `k` types: `(0,0), (0,1), …, (1,1), …`.
-fn type_pair(a: usize, b: usize, k: usize) -> usize {
-    let (a, b) = if a <= b { (a, b) } else { (b, a) };
-    a * (2 * k + 1 - a) / 2 + (b - a)
 }
 
 impl SiteRdf {
@@ -134,7 +128,7 @@ impl SiteRdf {
                     .map(|s| molecules[s] * per[s][a] * per[s][b])
                     .sum();
                 let p = total[a] * total[b] - own;
-                pairs[type_pair(a, b, k)] = if a == b { 0.5 * p } else { p };
+                pairs[pair_index(a, b, k)] = if a == b { 0.5 * p } else { p };
             }
         }
         pairs
@@ -180,7 +174,7 @@ impl SiteRdf {
             if owner[u] != owner[w] {
                 let bin = (d.length() * inv_w) as usize;
                 if bin < bins {
-                    counts[type_pair(kinds[u], kinds[w], k) * bins + bin] += 1;
+                    counts[pair_index(kinds[u], kinds[w], k) * bins + bin] += 1;
                 }
             }
         });
@@ -197,8 +191,7 @@ impl SiteRdf {
 
     /// Volume of the shell of bin `k`.
     fn shell_volume(&self, k: usize) -> f64 {
-        let (a, b) = (k as f64 * self.width, (k + 1) as f64 * self.width);
-        4.0 / 3.0 * std::f64::consts::PI * (b * b * b - a * a * a)
+        shell_volume(self.width, k)
     }
 
     /// The site types' names, in the order of [`partials`](Self::partials).
@@ -213,7 +206,7 @@ impl SiteRdf {
         let mut out = Vec::new();
         for a in 0..k {
             for b in a..k {
-                let p = type_pair(a, b, k);
+                let p = pair_index(a, b, k);
                 let pairs = self.pairs.get(p).copied().unwrap_or(0.0);
                 let rows = (0..self.bins)
                     .map(|bin| {
@@ -238,15 +231,6 @@ impl SiteRdf {
             }
         }
         out
-    }
-}
-
-/// `count / ideal`, 0 where the ideal count is 0.
-fn ratio(count: u64, ideal: f64) -> f64 {
-    if ideal > 0.0 {
-        count as f64 / ideal
-    } else {
-        0.0
     }
 }
 
