@@ -442,10 +442,11 @@ enum Pending {
 /// coordinate along `flight`, each proving a stretch in which `U` stays inside `band`
 /// (`potential::certify`), by the model's safe time or, where that proves little (on a level
 /// just crossed, or a level ahead), by its monotone window, or at a turn by its convex one.
-/// Stops at `limit`, at a crossing those windows locate (returned with the time of its model:
-/// it needs refinement, not a search), when a model proves less than `min_jump` (a crossing
-/// may be near: the root search takes over), or after 32 models. Returns the time reached,
-/// the models evaluated (0 for a potential without a model) and the located crossing, if any.
+/// Stops at `limit`, at a crossing those windows locate (returned: it needs refinement, not a
+/// search), when a model proves less than `min_jump` (a crossing may be near: the root search
+/// takes over), or after 32 models. Returns the time reached (at a located crossing, the time
+/// of the model that located it), the models evaluated (0 for a potential without a model) and
+/// the located crossing, if any.
 #[inline]
 fn certified_jump(
     band: &Band,
@@ -453,7 +454,7 @@ fn certified_jump(
     mut t: f64,
     limit: f64,
     min_jump: f64,
-) -> (f64, u64, Option<(f64, potential::certify::Crossing)>) {
+) -> (f64, u64, Option<potential::certify::Crossing>) {
     let mut models = 0;
     let mut ends: Option<(f64, f64)> = None;
     while t < limit && models < 32 {
@@ -481,7 +482,7 @@ fn certified_jump(
             }
             match proof {
                 Proof::Safe(s) => tau = tau.max(s),
-                Proof::Crossing(c) => return (t, models, Some((t, c))),
+                Proof::Crossing(c) => return (t, models, Some(c)),
                 Proof::Unknown => {}
             }
         }
@@ -827,18 +828,18 @@ impl<P: TerracedPotential> Terraced<P> {
                 1e-3 * self.settings.max_step,
             );
             self.stats.taylor_models += models;
-            if let Some((at, c)) = located {
+            if let Some(c) = located {
                 // One crossing, proven: refine it on the coordinate itself (a model at each
                 // iterate, counted as one) instead of searching `U`.
                 let sign = if c.rising { 1.0 } else { -1.0 };
-                let coordinate = |tau: f64| match model_at(at + tau, 0.0) {
+                let coordinate = |tau: f64| match model_at(t + tau, 0.0) {
                     Some(m) => (sign * (m.x - c.end), sign * m.dx),
                     None => (f64::NAN, f64::NAN),
                 };
                 let tol = 1e-10 * self.settings.max_step;
                 let (tau, evaluations) = monotone_root(coordinate, c.from, c.within, c.guess, tol);
                 self.stats.taylor_models += u64::from(evaluations);
-                let root = at + tau;
+                let root = t + tau;
                 if root > t_start {
                     self.stats.certified_jumps += 1;
                 }
