@@ -11,6 +11,8 @@
 //!   [`Ticket`] an event carries, so that events made obsolete by an earlier event are recognised
 //!   and dropped when popped instead of being searched for and cancelled; [`LazyQueue`] puts a
 //!   queue and a book together the way an event loop uses them;
+//! - [`Calendar`], an indexed calendar queue with one pending time per participant: buckets
+//!   linked through the participants' records, so a change of time is O(1) with nothing stale;
 //! - [`TournamentTree`], a complete binary tree with one leaf per participant, for schedulers
 //!   that keep exactly one event per participant (no stale events at all);
 //! - [`hold`], the classic hold model that benchmarks a queue (and a `std` heap adapter).
@@ -39,6 +41,7 @@
 //! ```
 
 mod bounded;
+mod calendar;
 mod heap;
 pub mod hold;
 mod lazy;
@@ -47,6 +50,7 @@ mod stamp;
 mod tournament;
 
 pub use bounded::{BoundedQueue, BoundedStats, DEFAULT_EVENTS_PER_BUCKET, Layout, Tuning};
+pub use calendar::{CALENDAR_EVENTS_PER_BUCKET, Calendar};
 pub use heap::HeapQueue;
 pub use lazy::{Cleanup, LazyQueue, LazyStats};
 pub use stamp::{ParticipantId, Stamp, StampBook, Stamped, Ticket};

@@ -963,13 +963,16 @@ impl ThermostatSpec {
 #[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
 #[serde(rename_all = "lowercase")]
 pub enum QueueKind {
-    /// G. Paul's O(1) bounded queue (default).
-    #[default]
+    /// G. Paul's O(1) bounded queue with lazy invalidation.
     Bounded,
     /// Binary heap, O(log n).
     Heap,
     /// Tournament tree, one leaf per body, updated in place.
     Tournament,
+    /// Indexed calendar queue: one entry per body in linked buckets, updated in place
+    /// (default).
+    #[default]
+    Calendar,
 }
 
 /// Run length and numerical settings.
@@ -986,7 +989,7 @@ pub struct RunSpec {
     pub events: Option<u64>,
     /// Or: production length in simulated time.
     pub time: Option<f64>,
-    /// Event queue (default `bounded`).
+    /// Event queue (default `calendar`).
     #[serde(default)]
     pub queue: QueueKind,
     /// Events between re-basings of the time origin (default 100 N, at least 10⁶, at most 2³¹).
@@ -2400,7 +2403,7 @@ events = 1000
         let s = Scene::from_str_with(MINIMAL, &[]).unwrap();
         assert_eq!(s.seed, 1);
         assert_eq!(s.species[0].mass, 1.0);
-        assert_eq!(s.run.queue, QueueKind::Bounded);
+        assert_eq!(s.run.queue, QueueKind::Calendar);
         assert_eq!(s.pair[0].steps, vec![[1.0, f64::INFINITY]]);
         assert!(s.output.plots);
     }

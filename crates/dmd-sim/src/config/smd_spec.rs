@@ -285,7 +285,7 @@ pub fn ignored_keys(scene: &Scene) -> Vec<String> {
     if scene.search.is_some() {
         keys.push("search".to_owned());
     }
-    if scene.run.queue != QueueKind::Bounded {
+    if scene.run.queue != QueueKind::default() {
         keys.push("run.queue".to_owned());
     }
     if scene.run.rebase_events.is_some() {

@@ -9,7 +9,7 @@ use std::collections::BTreeMap;
 use std::path::Path;
 use std::time::Instant;
 
-use event_queue::{BoundedQueue, HeapQueue, LazyQueue, Ticket, TournamentTree};
+use event_queue::{BoundedQueue, Calendar, HeapQueue, LazyQueue, Ticket, TournamentTree};
 use glam::DVec3;
 use serde::Serialize;
 
@@ -418,6 +418,7 @@ fn go_any_queue<G: Go, M: PairModel + Send + 'static>(
         QueueKind::Bounded => g.go::<_, LazyQueue<BoundedQueue<Ticket>>>(ctx, model),
         QueueKind::Heap => g.go::<_, LazyQueue<HeapQueue<Ticket>>>(ctx, model),
         QueueKind::Tournament => g.go::<_, TournamentTree>(ctx, model),
+        QueueKind::Calendar => g.go::<_, Calendar>(ctx, model),
     }
 }
 
@@ -1549,6 +1550,7 @@ impl<M: PairModel, Q: Scheduler> StagedRun<M, Q> {
                 QueueKind::Bounded => "bounded",
                 QueueKind::Heap => "heap",
                 QueueKind::Tournament => "tournament",
+                QueueKind::Calendar => "calendar",
             }
             .to_owned(),
             queue_pushed: qs.pushed,

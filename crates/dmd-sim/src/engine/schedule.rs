@@ -9,11 +9,14 @@
 //!   ticket and the participant's previous entry becomes stale through its generation stamp —
 //!   lazy invalidation, never a search. Both queues pop in one total order (time, then first
 //!   in, first out), so a run is bit-identical on either.
+//! - [`Calendar`]: one entry per participant in buckets linked through the participants'
+//!   records, moved in O(1) when its time changes (no stale entries); ties go to the lower
+//!   index, as in the tree.
 //! - [`TournamentTree`]: one leaf per participant, updated in place (no stale entries); ties go
 //!   to the lower index, so its order can differ from the queues' only between events at
 //!   exactly the same time.
 
-use event_queue::{EventQueue, LazyQueue, QueueError, Ticket, TournamentTree};
+use event_queue::{Calendar, EventQueue, LazyQueue, QueueError, Ticket, TournamentTree};
 
 /// One pending time per participant; the earliest comes out first.
 pub trait Scheduler {
@@ -115,6 +118,31 @@ impl Scheduler for TournamentTree {
     }
 }
 
+impl Scheduler for Calendar {
+    fn with_participants(n: usize) -> Self {
+        Calendar::new(n)
+    }
+
+    #[inline(always)]
+    fn set(&mut self, p: u32, time: f64) -> Result<(), QueueError> {
+        Calendar::set(self, p as usize, time)
+    }
+
+    #[inline(always)]
+    fn next(&mut self) -> Option<(u32, f64)> {
+        self.pop().map(|(p, t)| (p as u32, t))
+    }
+
+    #[inline(always)]
+    fn peek(&mut self) -> Option<u32> {
+        Calendar::peek(self).map(|(p, _)| p as u32)
+    }
+
+    fn held(&self) -> usize {
+        self.len()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -139,5 +167,6 @@ mod tests {
         assert_eq!(exercise::<LazyQueue<BoundedQueue<Ticket>>>(), expect);
         assert_eq!(exercise::<LazyQueue<HeapQueue<Ticket>>>(), expect);
         assert_eq!(exercise::<TournamentTree>(), expect);
+        assert_eq!(exercise::<Calendar>(), expect);
     }
 }

@@ -88,7 +88,7 @@ fn runs_are_deterministic_and_queue_independent() {
     };
     let a = strip(run(RODS, &[]));
     assert_eq!(a, strip(run(RODS, &[])));
-    assert_eq!(a, strip(run(RODS, &["run.queue=heap"])));
+    assert_eq!(a, strip(run(RODS, &["run.queue=bounded"])));
     assert_ne!(a, strip(run(RODS, &["seed=4"])));
 }
 
