@@ -1,7 +1,7 @@
 //! Events per second of the rods, for docs/PERFORMANCE.md: the paper's scene and the gas state
 //! point, with virtual events on and off and on the bounded queue, the calendar queue, the
-//! binary heap and the tournament tree, all in one run (interleaved, so that the load of the shared machine hits
-//! every variant alike).
+//! binary heap and the tournament tree, all in one run (interleaved, so that the load of the
+//! shared machine hits every variant alike).
 //!
 //! ```sh
 //! cargo run --release -p dmd-sim --example rods_speed -- [--repeats 3] [--time 4] [--gas-time 100] [--n 512]

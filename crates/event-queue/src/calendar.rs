@@ -176,7 +176,8 @@ impl Calendar {
         let buckets = self.buckets();
         let x = (time - self.base) * self.inv_width;
         if x < self.current as f64 {
-            self.current.min(buckets)
+            // `current` is the overflow itself while no window is laid out.
+            self.current
         } else if x < buckets as f64 {
             x as usize
         } else {
@@ -286,30 +287,21 @@ impl Calendar {
                 times.push(node.time);
             }
         }
-        let len = pending.len();
         let (base, width) = layout_for(&mut times);
-        let buckets = if len == 0 {
-            MIN_BUCKETS
-        } else {
-            ((WINDOW_REACH * len as f64 / CALENDAR_EVENTS_PER_BUCKET).ceil() as usize)
-                .clamp(MIN_BUCKETS, MAX_BUCKETS)
-                .next_power_of_two()
-        };
+        let buckets = ((WINDOW_REACH * pending.len() as f64 / CALENDAR_EVENTS_PER_BUCKET).ceil()
+            as usize)
+            .clamp(MIN_BUCKETS, MAX_BUCKETS)
+            .next_power_of_two();
+        // Relinking overwrites every pending node's links; the count stays.
         self.heads.clear();
         self.heads.resize(buckets + 1, NIL);
-        for &p in &pending {
-            self.nodes[p as usize].bucket = NIL;
-        }
         self.base = base;
         self.width = width;
         self.inv_width = 1.0 / width;
         self.current = 0;
-        self.len = 0;
         for &p in &pending {
-            let t = self.nodes[p as usize].time;
-            let b = self.bucket_of(t);
+            let b = self.bucket_of(self.nodes[p as usize].time);
             self.link(p as usize, b);
-            self.len += 1;
         }
         self.scratch = times;
     }
