@@ -124,8 +124,14 @@ impl Rdf {
             .collect();
         let species: Vec<u32> = view.bodies.iter().map(|b| b.species).collect();
         if let Some(s) = &mut self.sites {
-            // A view without attitudes is a run that did not ask for them: its site table
-            // stays empty (zeros), which the end-to-end tests would show.
+            // The driver asks for attitudes whenever `needs_attitudes` says so; a view without
+            // them is a wiring bug, which debug builds (every test) stop at. A release build
+            // leaves the site table without that sample rather than reading past the end.
+            debug_assert_eq!(
+                view.attitudes.len(),
+                n,
+                "the site-site g(r) is sampled from a view without attitudes"
+            );
             if view.attitudes.len() == n {
                 s.accumulate(&pos, &species, &view.attitudes, view.lengths);
             }

@@ -520,31 +520,40 @@ fn boundary_at<P: TerracedPotential>(
     }
 }
 
-/// Validation mode: searches `[from, to]` of a pair on `band` again on the fine `grid` (every
-/// extremum examined) and counts the check in `stats`. Returns the fine grid's root when it lies
-/// before `to` by more than `tol`, an event the search (or a certified jump) stepped over,
-/// counted as a miss.
+/// Validation mode (a fine `grid` set): searches `[from, to]` of a pair on `band` again on the
+/// grid (every extremum examined) and counts the check in `stats`. A root of the fine grid
+/// before `to` by more than 10⁻⁶ of the search's `max_step` is an event the search (or a
+/// certified jump) stepped over: a miss, counted, and described by `describe(root)` under
+/// `DMD_DEBUG_MISSES` ([`debug_miss`]).
+#[allow(clippy::too_many_arguments)]
 fn verify_stretch(
-    grid: Grid,
+    grid: Option<Grid>,
+    max_step: f64,
     pair_at: &impl Fn(f64) -> (f64, f64),
     band: &Band,
     from: f64,
     to: f64,
-    tol: f64,
     stats: &mut SearchStats,
-) -> Option<f64> {
+    describe: impl FnOnce(f64) -> String,
+) {
+    let Some(grid) = grid else {
+        return;
+    };
     stats.verified += 1;
     let mut reference = |t: f64| -> (f64, f64) {
         let (u, du) = pair_at(t);
         band.indicator(u, du)
     };
-    let root = grid
+    let tol = 1e-6 * max_step;
+    let missed = grid
         .start(&mut reference, from, to, Crossing::Falling, f64::INFINITY)
-        .ok()?
-        .root()
-        .filter(|&tg| tg < to - tol)?;
-    stats.verify_misses += 1;
-    Some(root)
+        .ok()
+        .and_then(|r| r.root())
+        .filter(|&tg| tg < to - tol);
+    if let Some(root) = missed {
+        stats.verify_misses += 1;
+        debug_miss(pair_at, from, to, || describe(root));
+    }
 }
 
 /// With the environment variable `DMD_DEBUG_MISSES` set: prints what `message` says of a miss,
@@ -843,19 +852,22 @@ impl<P: TerracedPotential> Terraced<P> {
                 if root > t_start {
                     self.stats.certified_jumps += 1;
                 }
-                if let Some(grid) = self.verify {
-                    let tol = 1e-6 * self.settings.max_step;
-                    if let Some(tg) =
-                        verify_stretch(grid, &pair_at, &band, t_start, root, tol, &mut self.stats)
-                    {
-                        debug_miss(&pair_at, t_start, root, || {
-                            format!(
-                                "missed by a located crossing: pair ({i}, {j}) terrace {k} \
-                                 {band:?} from {t_start} to {root}, fine grid root at {tg}"
-                            )
-                        });
-                    }
-                }
+                let max_step = self.settings.max_step;
+                verify_stretch(
+                    self.verify,
+                    max_step,
+                    &pair_at,
+                    &band,
+                    t_start,
+                    root,
+                    &mut self.stats,
+                    |tg| {
+                        format!(
+                            "missed by a located crossing: pair ({i}, {j}) terrace {k} {band:?} \
+                             from {t_start} to {root}, fine grid root at {tg}"
+                        )
+                    },
+                );
                 self.stats.roots += 1;
                 let boundary =
                     boundary_at(&band, pot, clamp, (ri, rj), dr + dv * (root - now), root);
@@ -864,19 +876,22 @@ impl<P: TerracedPotential> Terraced<P> {
             if t > t_start {
                 self.stats.certified_jumps += 1;
                 // The jumped stretch, searched on the fine grid like any search interval.
-                if let Some(grid) = self.verify {
-                    let tol = 1e-6 * self.settings.max_step;
-                    if let Some(tg) =
-                        verify_stretch(grid, &pair_at, &band, t_start, t, tol, &mut self.stats)
-                    {
-                        debug_miss(&pair_at, t_start, t, || {
-                            format!(
-                                "missed by a certified jump: pair ({i}, {j}) terrace {k} {band:?} \
-                                 from {t_start} to {t}, fine grid root at {tg}"
-                            )
-                        });
-                    }
-                }
+                let max_step = self.settings.max_step;
+                verify_stretch(
+                    self.verify,
+                    max_step,
+                    &pair_at,
+                    &band,
+                    t_start,
+                    t,
+                    &mut self.stats,
+                    |tg| {
+                        format!(
+                            "missed by a certified jump: pair ({i}, {j}) terrace {k} {band:?} \
+                             from {t_start} to {t}, fine grid root at {tg}"
+                        )
+                    },
+                );
                 if t >= end {
                     return None;
                 }
@@ -976,20 +991,22 @@ impl<P: TerracedPotential> Terraced<P> {
             root_search::Outcome::NoRoot => end,
         };
         // The same interval, searched again from where this call started.
-        if let Some(grid) = self.verify {
-            let tol = 1e-6 * self.settings.max_step;
-            if let Some(tg) =
-                verify_stretch(grid, &pair_at, &band, t0, checked_to, tol, &mut self.stats)
-            {
-                debug_miss(&pair_at, t0, checked_to, || {
-                    format!(
-                        "missed: pair ({i}, {j}) terrace {k} {band:?} search from {t0} to \
-                         {checked_to} (resumed: {}), fine grid root at {tg}",
-                        matches!(from, Pending::Resume(..))
-                    )
-                });
-            }
-        }
+        verify_stretch(
+            self.verify,
+            self.settings.max_step,
+            &pair_at,
+            &band,
+            t0,
+            checked_to,
+            &mut self.stats,
+            |tg| {
+                format!(
+                    "missed: pair ({i}, {j}) terrace {k} {band:?} search from {t0} to \
+                     {checked_to} (resumed: {}), fine grid root at {tg}",
+                    matches!(from, Pending::Resume(..))
+                )
+            },
+        );
         match report.outcome {
             root_search::Outcome::Root(r) => {
                 self.stats.roots += 1;
