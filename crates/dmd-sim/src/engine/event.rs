@@ -216,13 +216,17 @@ impl EventLists {
         bodies: &[crate::engine::body::Body],
     ) -> Option<(usize, Event)> {
         loop {
-            let mut best: Option<(usize, Event)> = None;
-            for (k, e) in self.of(i).iter().enumerate() {
-                if best.is_none_or(|(_, b)| e.time < b.time) {
-                    best = Some((k, *e));
+            let list = self.of(i);
+            let first = list.first()?;
+            // The first of the smallest times (index and time only: the entry is read once,
+            // after the scan).
+            let (mut k, mut t) = (0, first.time);
+            for (m, e) in list.iter().enumerate().skip(1) {
+                if e.time < t {
+                    (k, t) = (m, e.time);
                 }
             }
-            let (k, e) = best?;
+            let e = list[k];
             if e.is_current(bodies) {
                 return Some((k, e));
             }
