@@ -837,9 +837,9 @@ impl<P: TerracedPotential> Terraced<P> {
                 1e-3 * self.settings.max_step,
             );
             self.stats.taylor_models += models;
-            if let Some(c) = located {
-                // One crossing, proven: refine it on the coordinate itself (a model at each
-                // iterate, counted as one) instead of searching `U`.
+            // One crossing, proven: refine it on the coordinate itself (a model at each
+            // iterate, counted as one) instead of searching `U`.
+            let root = located.map(|c| {
                 let sign = if c.rising { 1.0 } else { -1.0 };
                 let coordinate = |tau: f64| match model_at(t + tau, 0.0) {
                     Some(m) => (sign * (m.x - c.end), sign * m.dx),
@@ -848,50 +848,40 @@ impl<P: TerracedPotential> Terraced<P> {
                 let tol = 1e-10 * self.settings.max_step;
                 let (tau, evaluations) = monotone_root(coordinate, c.from, c.within, c.guess, tol);
                 self.stats.taylor_models += u64::from(evaluations);
-                let root = t + tau;
-                if root > t_start {
-                    self.stats.certified_jumps += 1;
-                }
-                let max_step = self.settings.max_step;
+                t + tau
+            });
+            let (proven_to, how) = match root {
+                Some(r) => (r, "a located crossing"),
+                None => (t, "a certified jump"),
+            };
+            if proven_to > t_start {
+                self.stats.certified_jumps += 1;
+            }
+            if root.is_some() || t > t_start {
+                // The proven stretch, searched on the fine grid like any search interval.
                 verify_stretch(
                     self.verify,
-                    max_step,
+                    self.settings.max_step,
                     &pair_at,
                     &band,
                     t_start,
-                    root,
+                    proven_to,
                     &mut self.stats,
                     |tg| {
                         format!(
-                            "missed by a located crossing: pair ({i}, {j}) terrace {k} {band:?} \
-                             from {t_start} to {root}, fine grid root at {tg}"
+                            "missed by {how}: pair ({i}, {j}) terrace {k} {band:?} from \
+                             {t_start} to {proven_to}, fine grid root at {tg}"
                         )
                     },
                 );
+            }
+            if let Some(root) = root {
                 self.stats.roots += 1;
                 let boundary =
                     boundary_at(&band, pot, clamp, (ri, rj), dr + dv * (root - now), root);
                 return Some((root - now, Kind::Pair(boundary)));
             }
             if t > t_start {
-                self.stats.certified_jumps += 1;
-                // The jumped stretch, searched on the fine grid like any search interval.
-                let max_step = self.settings.max_step;
-                verify_stretch(
-                    self.verify,
-                    max_step,
-                    &pair_at,
-                    &band,
-                    t_start,
-                    t,
-                    &mut self.stats,
-                    |tg| {
-                        format!(
-                            "missed by a certified jump: pair ({i}, {j}) terrace {k} {band:?} \
-                             from {t_start} to {t}, fine grid root at {tg}"
-                        )
-                    },
-                );
                 if t >= end {
                     return None;
                 }
