@@ -139,6 +139,37 @@ pub trait RigidPairPotential {
     fn reach(&self, u_k: f64) -> Result<f64, PotentialError>;
 }
 
+/// [`RigidPairPotential::reach`] from monotone envelopes of `U` (the site-based potentials):
+/// a level below the rigorous `minimum` is reached nowhere (0); an attractive level `u_k < 0`
+/// reaches as far as `outermost_attract(−u_k)`, the outermost distance where the attractive
+/// envelope is still at least `−u_k`; a repulsive level as far as `outermost_repel(u_k)`.
+///
+/// # Errors
+/// [`PotentialError::LevelAtZero`] for `u_k = 0`, [`PotentialError::NotFinite`] for a
+/// non-finite level.
+pub(crate) fn reach_from_envelopes(
+    u_k: f64,
+    minimum: f64,
+    outermost_attract: impl FnOnce(f64) -> f64,
+    outermost_repel: impl FnOnce(f64) -> f64,
+) -> Result<f64, PotentialError> {
+    if !u_k.is_finite() {
+        return Err(PotentialError::NotFinite("level"));
+    }
+    if u_k == 0.0 {
+        return Err(PotentialError::LevelAtZero(u_k));
+    }
+    Ok(if u_k < 0.0 {
+        if u_k < minimum {
+            0.0
+        } else {
+            outermost_attract(-u_k)
+        }
+    } else {
+        outermost_repel(u_k)
+    })
+}
+
 impl<P: RigidPairPotential + ?Sized> RigidPairPotential for &P {
     #[inline]
     fn energy(&self, g: &RigidGeometry) -> f64 {

@@ -613,21 +613,12 @@ impl RigidPairPotential for SiteSite {
     /// An upper bound on the reach from the monotone envelopes of the module documentation;
     /// at most [`cutoff`](SiteSite::cutoff).
     fn reach(&self, u_k: f64) -> Result<f64, PotentialError> {
-        if !u_k.is_finite() {
-            return Err(PotentialError::NotFinite("level"));
-        }
-        if u_k == 0.0 {
-            return Err(PotentialError::LevelAtZero(u_k));
-        }
-        Ok(if u_k < 0.0 {
-            if u_k < self.minimum {
-                0.0
-            } else {
-                self.outermost(|r| self.attract(r), -u_k)
-            }
-        } else {
-            self.outermost(|r| self.repel(r), u_k)
-        })
+        crate::rigid::reach_from_envelopes(
+            u_k,
+            self.minimum,
+            |target| self.outermost(|r| self.attract(r), target),
+            |target| self.outermost(|r| self.repel(r), target),
+        )
     }
 }
 

@@ -509,21 +509,12 @@ impl RigidPairPotential for SoftStickyDipole {
     /// An upper bound on the reach from the monotone envelopes of the module documentation;
     /// at most `r_c`. Zero for a negative level below [`minimum`](RigidPairPotential::minimum).
     fn reach(&self, u_k: f64) -> Result<f64, PotentialError> {
-        if !u_k.is_finite() {
-            return Err(PotentialError::NotFinite("level"));
-        }
-        if u_k == 0.0 {
-            return Err(PotentialError::LevelAtZero(u_k));
-        }
-        Ok(if u_k < 0.0 {
-            if u_k < self.minimum {
-                0.0
-            } else {
-                self.outermost(|r| self.attract(r), -u_k)
-            }
-        } else {
-            self.outermost(|r| self.repel(r), u_k)
-        })
+        crate::rigid::reach_from_envelopes(
+            u_k,
+            self.minimum,
+            |target| self.outermost(|r| self.attract(r), target),
+            |target| self.outermost(|r| self.repel(r), target),
+        )
     }
 }
 
