@@ -26,10 +26,7 @@ fn dir(name: &str) -> PathBuf {
 
 /// A shipped scene with `overrides`.
 fn shipped(name: &str, overrides: &[String]) -> Scene {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../scenes")
-        .join(name);
-    let text = std::fs::read_to_string(&path).unwrap();
+    let text = crate::support::shipped_text(name);
     Scene::from_str_with(&text, overrides).unwrap_or_else(|e| panic!("{name}: {e}"))
 }
 

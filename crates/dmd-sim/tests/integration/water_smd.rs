@@ -2,20 +2,18 @@
 //! full-attitude potential, run through the library as `dmd run --engine smd` runs them;
 //! 343 molecules and a few tens of femtoseconds.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use dmd_sim::run::{Quiet, run_scene};
 use dmd_sim::scene::Scene;
 use dmd_sim::smd_engine::{self, Engine};
 
-fn scene_path() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/water-ssd.toml")
-}
+use crate::support::scratch;
 
 /// The water scene with `overrides`, shortened: 7³ molecules (a 21.7 Å box, whose half side
 /// exceeds the 9 Å cut-off plus the skin), 0.03 ps of equilibration and of production.
 fn water(overrides: &[&str]) -> Scene {
-    let text = std::fs::read_to_string(scene_path()).expect("the shipped scene");
+    let text = crate::support::shipped_text("water-ssd.toml");
     let mut o: Vec<String> = [
         "species.0.count=343",
         "run.equilibration_time=0.03",
@@ -93,10 +91,7 @@ fn both_engines_start_water_from_the_same_state() {
         "smd.dt=0.00002",
         "output.trajectory={interval=0.00002}",
     ];
-    let dirs = [
-        std::env::temp_dir().join(format!("dmd-water-start-smd-{}", std::process::id())),
-        std::env::temp_dir().join(format!("dmd-water-start-dmd-{}", std::process::id())),
-    ];
+    let dirs = [scratch("water-start-smd"), scratch("water-start-dmd")];
     let smd = water(&short);
     smd_engine::run(&smd, Path::new("."), Some(&dirs[0])).unwrap_or_else(|e| panic!("{e}"));
     let mut dmd = water(&short);
@@ -123,8 +118,7 @@ fn both_engines_start_water_from_the_same_state() {
 
 #[test]
 fn water_runs_with_the_smd_engine() {
-    let dir = std::env::temp_dir().join(format!("dmd-water-smd-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
+    let dir = scratch("water-smd");
     let s =
         smd_engine::run(&water(&[]), Path::new("."), Some(&dir)).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(s.model, "smd-ssd-e");

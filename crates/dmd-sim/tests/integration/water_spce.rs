@@ -2,19 +2,17 @@
 //! site–site Lennard-Jones and damped shifted force Coulomb terms, run by both engines through
 //! the library as `dmd run` runs them, a few hundred events or a few tens of femtoseconds.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use dmd_sim::run::{Quiet, run_scene};
 use dmd_sim::scene::Scene;
 use dmd_sim::smd_engine::{self, Engine};
 
-fn scene_path() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/water-spce.toml")
-}
+use crate::support::scratch;
 
 /// The shipped scene with `overrides`, without its own lengths of run and outputs.
 fn water(overrides: &[&str]) -> Scene {
-    let text = std::fs::read_to_string(scene_path()).expect("the shipped scene");
+    let text = crate::support::shipped_text("water-spce.toml");
     let mut o: Vec<String> = ["run.equilibration_time=", "run.time=", "output="]
         .iter()
         .map(|s| (*s).to_owned())
@@ -23,15 +21,9 @@ fn water(overrides: &[&str]) -> Scene {
     Scene::from_str_with(&text, &o).unwrap_or_else(|e| panic!("{e}"))
 }
 
-fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("dmd-spce-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
-}
-
 #[test]
 fn terraced_spc_e_conserves_energy_and_misses_nothing() {
-    let dir = scratch("dmd");
+    let dir = scratch("spce-dmd");
     let scene = water(&[
         "run.equilibration_events=300",
         "run.events=1500",
@@ -58,7 +50,7 @@ fn terraced_spc_e_conserves_energy_and_misses_nothing() {
 
 #[test]
 fn standard_md_runs_spc_e_as_rigid_tops() {
-    let dir = scratch("smd");
+    let dir = scratch("spce-smd");
     let mut scene = water(&[
         "species.0.count=512",
         "run.equilibration_time=0.02",
@@ -100,7 +92,7 @@ fn a_hard_core_above_the_barrier_is_refused_naming_the_key() {
 
 #[test]
 fn bad_keys_of_the_kind_are_named() {
-    let text = std::fs::read_to_string(scene_path()).unwrap();
+    let text = crate::support::shipped_text("water-spce.toml");
     for (set, key) in [
         ("pair.0.potential.r_cut=3.0", "pair[0].potential.r_cut"),
         ("pair.0.potential.alpha=-0.1", "pair[0].potential.alpha"),
@@ -173,7 +165,7 @@ fn check_site_columns(dir: &Path) -> Vec<String> {
 #[test]
 fn both_engines_write_the_site_site_g_of_r() {
     let rdf = "output.rdf={ bins = 100, r_max = 6.0, every = 1 }";
-    let dir = scratch("sites-dmd");
+    let dir = scratch("spce-sites-dmd");
     let scene = water(&[
         "run.equilibration_events=100",
         "run.events=400",
@@ -184,7 +176,7 @@ fn both_engines_write_the_site_site_g_of_r() {
     let dmd = check_site_columns(&dir);
     let _ = std::fs::remove_dir_all(&dir);
 
-    let dir = scratch("sites-smd");
+    let dir = scratch("spce-sites-smd");
     let mut scene = water(&[
         "species.0.count=512",
         "run.equilibration_time=0.01",
@@ -205,7 +197,7 @@ fn both_engines_write_the_site_site_g_of_r() {
 /// sites by the right attitudes (a wrong body frame would put the hydrogens elsewhere).
 #[test]
 fn standard_md_spc_e_oxygens_peak_near_2_75_angstrom() {
-    let dir = scratch("peak-smd");
+    let dir = scratch("spce-peak-smd");
     let mut scene = water(&[
         "species.0.count=512",
         "thermostat.rate=50",
@@ -243,9 +235,9 @@ fn standard_md_spc_e_oxygens_peak_near_2_75_angstrom() {
 /// resumed production samples the attitudes again.
 #[test]
 fn a_resumed_run_writes_the_same_site_site_g_of_r() {
-    use crate::support::{options, resume, run_text, same_files, scratch};
+    use crate::support::{options, resume, run_text, same_files};
     use dmd_sim::checkpoint::{self, Every};
-    let text = std::fs::read_to_string(scene_path()).expect("the shipped scene");
+    let text = crate::support::shipped_text("water-spce.toml");
     let ov: Vec<String> = [
         "run.equilibration_time=",
         "run.time=",

@@ -24,6 +24,11 @@ pub(crate) fn shipped_scenes() -> Vec<PathBuf> {
     v
 }
 
+/// The text of the shipped scene `name`.
+pub(crate) fn shipped_text(name: &str) -> String {
+    std::fs::read_to_string(scenes_dir().join(name)).unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
 /// A shipped scene with `overrides` (as `--set`) and the folder its paths are relative to.
 pub(crate) fn shipped(name: &str, overrides: &[&str]) -> (Scene, PathBuf) {
     let o: Vec<String> = overrides.iter().map(|s| (*s).to_owned()).collect();
