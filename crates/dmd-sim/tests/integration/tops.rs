@@ -94,6 +94,19 @@ fn invariants(sim: &Simulation<Terraced<Water>, Queue>) -> Invariants {
 
 type Invariants = (f64, DVec3, DVec3);
 
+/// The simulation of `model` from positions `r` and velocities `v` in a 40 Å box.
+fn in_box(model: Terraced<Water>, r: &[DVec3], v: &[DVec3]) -> Simulation<Terraced<Water>, Queue> {
+    Simulation::new(
+        DVec3::splat(40.0),
+        r,
+        v,
+        &vec![0; r.len()],
+        model,
+        settings(0.5),
+    )
+    .unwrap()
+}
+
 /// Runs `model` for `events` from positions `r` and velocities `v` in a 40 Å box: the
 /// simulation and its invariants before and after.
 fn run_in_box(
@@ -102,15 +115,7 @@ fn run_in_box(
     v: &[DVec3],
     events: u64,
 ) -> (Simulation<Terraced<Water>, Queue>, Invariants, Invariants) {
-    let mut sim: Simulation<_, Queue> = Simulation::new(
-        DVec3::splat(40.0),
-        r,
-        v,
-        &vec![0; r.len()],
-        model,
-        settings(0.5),
-    )
-    .unwrap();
+    let mut sim = in_box(model, r, v);
     let before = invariants(&sim);
     sim.run(Stop::Events(events), &mut NoSampler, &mut |_| {})
         .unwrap();
@@ -256,11 +261,9 @@ enum Turn {
     Reflected,
 }
 
-/// `q ⊗ (0, w)`, the Hamilton product written out.
+/// `q ⊗ (0, w)`, the Hamilton product with a pure quaternion.
 fn times_pure(q: DQuat, w: DVec3) -> DQuat {
-    let u = DVec3::new(q.x, q.y, q.z);
-    let v = q.w * w + u.cross(w);
-    DQuat::from_xyzw(v.x, v.y, v.z, -u.dot(w))
+    q * DQuat::from_xyzw(w.x, w.y, w.z, 0.0)
 }
 
 /// Torque-free motion over `dt`: the centre on a straight line, attitude and body-frame angular
@@ -572,8 +575,7 @@ fn water_molecules_follow_a_tight_integration_of_the_terraced_dynamics() {
     let model = water(&poses, &omegas, step, SearchSettings::paper(0.02));
     let r: Vec<DVec3> = start.iter().map(|t| centre + t.r).collect();
     let v: Vec<DVec3> = start.iter().map(|t| t.v).collect();
-    let mut sim: Simulation<_, Queue> =
-        Simulation::new(DVec3::splat(40.0), &r, &v, &[0; 3], model, settings(0.5)).unwrap();
+    let mut sim = in_box(model, &r, &v);
     // One event at a time (virtual events and list updates included), each pair event held
     // against the reference's next one.
     let mut seen = 0;
