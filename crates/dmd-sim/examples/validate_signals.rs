@@ -88,6 +88,9 @@ jitter = 0.01
 [run]
 equilibration_time = 2.0
 events = {EVENTS}
+# A signal stops a run at its next re-basing: at the default (10⁶ events) the quick check's
+# production (about 6·10⁵ events) may hold none, and the stopped run then ends normally.
+rebase_events = 1e5
 [output]
 sample_interval = 0.005
 rdf = { bins = 200, r_max = 12.0, every = 20 }
