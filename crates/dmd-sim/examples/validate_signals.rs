@@ -50,6 +50,9 @@ temperature = 1.0
 [run]
 equilibration_events = 4e5
 events = {EVENTS}
+# As for the rods below: a signal stops a run at its next re-basing, and the quick check's
+# production (about 10⁶ events) may hold none at the default interval.
+rebase_events = 1e5
 [output]
 sample_interval = 0.05
 series = true
