@@ -1208,7 +1208,7 @@ fn resume(path: PathBuf, out: Option<PathBuf>, quiet: bool, every: Option<String
     }
 }
 
-/// SIGINT, SIGTERM and SIGHUP stop the run at its next re-basing with a checkpoint; a second
+/// SIGINT, SIGTERM and SIGHUP stop the run at a re-basing (within about 5 s) with a checkpoint; a second
 /// signal ends it at once (`dmd_sim::interrupt`).
 fn install_signal_handlers() -> Result<(), ExitCode> {
     dmd_sim::interrupt::install().map_err(|e| {

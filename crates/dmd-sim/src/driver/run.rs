@@ -839,6 +839,10 @@ impl Context<'_> {
         // With signal handlers installed every re-basing is a chance to stop (saved exactly).
         let interruptible = crate::driver::interrupt::installed() && driver.saver.can_save();
         sim.set_pause_at_rebase((driver.saver.active() || interruptible) && scene.hmc.is_none());
+        if interruptible {
+            use crate::driver::interrupt;
+            sim.set_stop_request(interrupt::flag(), interrupt::GRACE);
+        }
 
         // Equilibration.
         let andersen = (scene.thermostat.kind == ThermostatKind::Andersen).then(|| Andersen {

@@ -28,6 +28,7 @@
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
 
 use event_queue::QueueError;
 use glam::{DQuat, DVec3};
@@ -421,6 +422,10 @@ pub struct Simulation<M, S> {
     refreshed_momenta: bool,
     /// Set by another thread to stop [`Simulation::run`] early ([`Simulation::set_cancel`]).
     cancel: Option<Arc<AtomicBool>>,
+    /// A stop asked from outside and how long to wait for a scheduled re-basing
+    /// ([`Simulation::set_stop_request`]), and when the loop first saw it.
+    stop_request: Option<(Arc<AtomicBool>, Duration)>,
+    stop_seen: Option<Instant>,
 }
 
 impl<M, S> Simulation<M, S>
@@ -613,6 +618,8 @@ where
             paused: false,
             refreshed_momenta: false,
             cancel: None,
+            stop_request: None,
+            stop_seen: None,
         };
         sim.kinetic = sim.kinetic_energy();
         sim.translational = sim.translational_kinetic();
@@ -655,6 +662,15 @@ where
                     self.paused = true;
                     break;
                 }
+            }
+            // A requested stop waits for the scheduled re-basing (where a checkpoint continues
+            // exactly as if never stopped) only as long as its grace: a re-basing of rigid
+            // tops can be minutes of events away, and a batch system's SIGKILL follows its
+            // SIGTERM within seconds.
+            if self.counters.events & 0xff == 0 && self.pause_at_rebase && self.stop_overdue() {
+                self.rebase();
+                self.paused = true;
+                break;
             }
             if self.counters.events & 0x3fff == 0 {
                 progress(Progress {
@@ -1351,6 +1367,28 @@ where
     /// the state is whole. `None` (the default) never stops.
     pub fn set_cancel(&mut self, flag: Option<Arc<AtomicBool>>) {
         self.cancel = flag;
+    }
+
+    /// A flag (set by a signal handler) that asks [`run`](Self::run) to pause at a re-basing
+    /// when [`set_pause_at_rebase`](Self::set_pause_at_rebase) is on: at the scheduled one if
+    /// it comes within `grace` of wall time after the loop first sees the flag (read every
+    /// 256 events), otherwise at a re-basing made then. The state there is whole and can be
+    /// saved exactly either way; only an early re-basing makes the continuation differ from a
+    /// run never stopped, by the rounding of moving the time origin.
+    pub fn set_stop_request(&mut self, flag: Option<Arc<AtomicBool>>, grace: Duration) {
+        self.stop_request = flag.map(|f| (f, grace));
+        self.stop_seen = None;
+    }
+
+    /// Whether a stop was requested longer than its grace ago.
+    fn stop_overdue(&mut self) -> bool {
+        let Some((flag, grace)) = &self.stop_request else {
+            return false;
+        };
+        if !flag.load(Ordering::Relaxed) {
+            return false;
+        }
+        self.stop_seen.get_or_insert_with(Instant::now).elapsed() >= *grace
     }
 
     /// Switches the Andersen thermostat on (or off with `None`).

@@ -444,6 +444,92 @@ fn two_n_events_straight_or_n_plus_checkpoint_plus_n_give_the_same_bits() {
     assert!(straight.counters().step_in > 100, "the steps took part");
 }
 
+/// A stop requested (a signal's flag) far from the scheduled re-basing: within its grace the
+/// loop runs on towards the scheduled one; past it the loop re-bases at once and pauses there,
+/// and a checkpoint taken there continues bit for bit as the paused simulation does.
+#[test]
+fn a_stop_past_its_grace_re_bases_early_and_its_checkpoint_continues_exactly() {
+    use collide::Particle;
+    use dmd_sim::model::Stepped;
+    use dmd_sim::potential::Potentials;
+    use dmd_sim::simulation::{LoopSettings, NoSampler, Simulation, Stop};
+    use event_queue::{BoundedQueue, LazyQueue, Ticket};
+    use glam::DVec3;
+    use std::sync::Arc;
+    use std::sync::atomic::AtomicBool;
+    use std::time::Duration;
+    type Sim = Simulation<Stepped, LazyQueue<BoundedQueue<Ticket>>>;
+
+    let pots = || {
+        Potentials::from_tables(
+            1,
+            &[((0, 0), vec![[1.0, f64::INFINITY], [1.2, 0.5], [1.5, -1.0]])],
+        )
+    };
+    let model = || Stepped::new(pots(), vec![Particle::new(1.0).unwrap()], 125);
+    let pos: Vec<DVec3> = (0..125)
+        .map(|i| DVec3::new(f64::from(i % 5), f64::from(i / 5 % 5), f64::from(i / 25)) * 1.5 + 0.3)
+        .collect();
+    let vel = dmd_sim::init::maxwell_boltzmann(&[1.0; 125], 2.0, 4);
+    let settings = LoopSettings {
+        rebase_events: 1_000_000,
+        seed: 3,
+        debug_check_events: 0,
+        skin: 0.2,
+        start_time: 0.0,
+    };
+    let new = || -> Sim {
+        Simulation::new(DVec3::splat(7.5), &pos, &vel, &[0; 125], model(), settings).unwrap()
+    };
+    let raised = Arc::new(AtomicBool::new(true));
+
+    // A long grace: the 30 000 events hold no scheduled re-basing, so the run is not stopped.
+    let mut patient = new();
+    patient.set_pause_at_rebase(true);
+    patient.set_stop_request(Some(Arc::clone(&raised)), Duration::from_secs(3600));
+    patient
+        .run(Stop::Events(30_000), &mut NoSampler, &mut |_| {})
+        .unwrap();
+    assert!(!patient.take_paused());
+    assert_eq!(patient.counters().events, 30_000);
+    assert_eq!(patient.counters().rebases, 0);
+
+    // No grace: the loop re-bases and pauses at its next look at the flag (every 256 events).
+    let mut stopped = new();
+    stopped.set_pause_at_rebase(true);
+    stopped.set_stop_request(Some(Arc::clone(&raised)), Duration::ZERO);
+    stopped
+        .run(Stop::Events(30_000), &mut NoSampler, &mut |_| {})
+        .unwrap();
+    assert!(stopped.take_paused());
+    let at = stopped.counters().events;
+    assert!(at > 0 && at <= 256, "paused after {at} events");
+    assert_eq!(stopped.counters().rebases, 1);
+
+    // Saved there and resumed, against the paused simulation itself going on.
+    let mut resumed = Sim::from_state(model(), &stopped.save_state()).unwrap();
+    stopped.set_stop_request(None, Duration::ZERO);
+    stopped
+        .run(Stop::Events(30_000 - at), &mut NoSampler, &mut |_| {})
+        .unwrap();
+    resumed
+        .run(Stop::Events(30_000 - at), &mut NoSampler, &mut |_| {})
+        .unwrap();
+    assert_eq!(resumed.counters(), stopped.counters());
+    assert_eq!(resumed.now().to_bits(), stopped.now().to_bits());
+    for (a, b) in resumed.bodies().iter().zip(stopped.bodies()) {
+        assert_eq!(
+            a.r.to_array().map(f64::to_bits),
+            b.r.to_array().map(f64::to_bits)
+        );
+        assert_eq!(
+            a.v.to_array().map(f64::to_bits),
+            b.v.to_array().map(f64::to_bits)
+        );
+    }
+    assert!(stopped.counters().step_in > 100, "the steps took part");
+}
+
 /// Rods on terraced potentials (issue 7) with every output, re-based every 700 events so that
 /// checkpoints fall mid-run: the rotors, the search counters and the predictions rebuilt from
 /// them must continue bit for bit.

@@ -332,6 +332,8 @@ where
             paused: false,
             refreshed_momenta: false,
             cancel: None,
+            stop_request: None,
+            stop_seen: None,
         };
         sim.restore_state(state, true)?;
         Ok(sim)
