@@ -152,6 +152,14 @@ pub(crate) const CHECKS: &[Check] = &[
         quick: &["--quick"],
     },
     Check {
+        name: "terraced-mc",
+        title: "Terraced dynamics against a Monte Carlo of the same terraced model",
+        package: "dmd-sim",
+        example: "validate_terraced_mc",
+        full: &[],
+        quick: &["--quick"],
+    },
+    Check {
         name: "frontier",
         title: "The error-against-cost frontier: DMD at several ΔV and level rules against SMD at several time steps, dense fluid and gas",
         package: "dmd-sim",
