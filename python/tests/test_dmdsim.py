@@ -1,5 +1,6 @@
 """Tests of the dmdsim package: run with `python3 -m pytest python/tests` after installing it."""
 
+import contextlib
 import json
 import os
 import signal
@@ -221,15 +222,25 @@ def test_run_gives_the_summary_of_the_command(tmp_path):
         assert summary[key] == cli[key], key
 
 
-def test_ctrl_c_stops_a_whole_run():
-    timer = threading.Timer(0.5, lambda: os.kill(os.getpid(), signal.SIGINT))
-    started = time.monotonic()
+@contextlib.contextmanager
+def ctrl_c_after(seconds):
+    """Sends this process SIGINT after `seconds`, with Python's own handler in place: a
+    process started in the background by a shell without job control inherits SIGINT
+    ignored, and Python then installs no handler, so the signal would never arrive."""
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    timer = threading.Timer(seconds, lambda: os.kill(os.getpid(), signal.SIGINT))
     timer.start()
     try:
-        with pytest.raises(KeyboardInterrupt):
-            dmdsim.run(hard_spheres(count=500, events=10**12))
+        yield
     finally:
         timer.cancel()
+        signal.signal(signal.SIGINT, previous)
+
+
+def test_ctrl_c_stops_a_whole_run():
+    started = time.monotonic()
+    with ctrl_c_after(0.5), pytest.raises(KeyboardInterrupt):
+        dmdsim.run(hard_spheres(count=500, events=10**12))
     assert time.monotonic() - started < 30.0
 
 
@@ -299,14 +310,9 @@ def test_rods_load_from_the_last_frame_of_their_gsd_trajectory(tmp_path):
 
 def test_ctrl_c_stops_the_engine_and_leaves_it_usable():
     sim = dmdsim.load(hard_spheres(count=500, events=10**12))
-    timer = threading.Timer(0.5, lambda: os.kill(os.getpid(), signal.SIGINT))
     started = time.monotonic()
-    timer.start()
-    try:
-        with pytest.raises(KeyboardInterrupt):
-            sim.advance(events=10**12)
-    finally:
-        timer.cancel()
+    with ctrl_c_after(0.5), pytest.raises(KeyboardInterrupt):
+        sim.advance(events=10**12)
     # The timer thread ran while the engine did: the GIL was released.
     assert time.monotonic() - started < 30.0
     stopped = sim.events
