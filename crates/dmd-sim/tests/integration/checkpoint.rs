@@ -340,46 +340,72 @@ fn the_command_resumes_a_halted_run() {
     let _ = std::fs::remove_dir_all(d);
 }
 
+/// The loop-level tests' system: 125 spheres on a 5³ lattice of spacing 1.5 in a box of 7.5,
+/// a core at 1, a shoulder of 0.5 to 1.2 and a well of −1 to 1.5, at kT = 2.
+mod small {
+    use collide::Particle;
+    use dmd_sim::model::Stepped;
+    use dmd_sim::potential::Potentials;
+    use dmd_sim::simulation::{LoopSettings, Simulation};
+    use event_queue::{BoundedQueue, LazyQueue, Ticket};
+    use glam::DVec3;
+
+    pub(crate) type Sim = Simulation<Stepped, LazyQueue<BoundedQueue<Ticket>>>;
+
+    pub(crate) fn model() -> Stepped {
+        let pots = Potentials::from_tables(
+            1,
+            &[((0, 0), vec![[1.0, f64::INFINITY], [1.2, 0.5], [1.5, -1.0]])],
+        );
+        Stepped::new(pots, vec![Particle::new(1.0).unwrap()], 125)
+    }
+
+    /// A fresh simulation of the system, re-based every `rebase_events`, with the debug
+    /// invariant check every `debug_check_events` (0: never).
+    pub(crate) fn new(rebase_events: u64, debug_check_events: u64) -> Sim {
+        let pos: Vec<DVec3> = (0..125)
+            .map(|i| {
+                DVec3::new(f64::from(i / 25), f64::from(i / 5 % 5), f64::from(i % 5)) * 1.5 + 0.3
+            })
+            .collect();
+        let vel = dmd_sim::init::maxwell_boltzmann(&[1.0; 125], 2.0, 4);
+        let settings = LoopSettings {
+            rebase_events,
+            seed: 3,
+            debug_check_events,
+            skin: 0.2,
+            start_time: 0.0,
+        };
+        Simulation::new(DVec3::splat(7.5), &pos, &vel, &[0; 125], model(), settings).unwrap()
+    }
+
+    /// The same bits in the counters, the clock and every body's position and velocity.
+    pub(crate) fn assert_same(a: &Sim, b: &Sim) {
+        assert_eq!(a.counters(), b.counters());
+        assert_eq!(a.now().to_bits(), b.now().to_bits());
+        for (x, y) in a.bodies().iter().zip(b.bodies()) {
+            assert_eq!(x, y, "a body differs");
+            assert_eq!(
+                x.r.to_array().map(f64::to_bits),
+                y.r.to_array().map(f64::to_bits)
+            );
+            assert_eq!(
+                x.v.to_array().map(f64::to_bits),
+                y.v.to_array().map(f64::to_bits)
+            );
+        }
+    }
+}
+
 /// The test, at the level of the loop: 2N events straight, or N events, a checkpoint
 /// (through the file encoding), a fresh simulation built from it, and N more events: the same
 /// bits in every body's position, clock, velocity and generation, and in the time.
 #[test]
 fn two_n_events_straight_or_n_plus_checkpoint_plus_n_give_the_same_bits() {
-    use collide::Particle;
-    use dmd_sim::model::Stepped;
-    use dmd_sim::potential::Potentials;
-    use dmd_sim::simulation::{LoopSettings, NoSampler, Simulation, Stop};
-    use event_queue::{BoundedQueue, LazyQueue, Ticket};
-    use glam::DVec3;
-    type Sim = Simulation<Stepped, LazyQueue<BoundedQueue<Ticket>>>;
+    use dmd_sim::simulation::{NoSampler, Stop};
 
-    let pots = || {
-        Potentials::from_tables(
-            1,
-            &[((0, 0), vec![[1.0, f64::INFINITY], [1.2, 0.5], [1.5, -1.0]])],
-        )
-    };
-    let model = || Stepped::new(pots(), vec![Particle::new(1.0).unwrap()], 125);
-    let mut pos = Vec::new();
-    for x in 0..5 {
-        for y in 0..5 {
-            for z in 0..5 {
-                pos.push(DVec3::new(f64::from(x), f64::from(y), f64::from(z)) * 1.5 + 0.3);
-            }
-        }
-    }
-    let vel = dmd_sim::init::maxwell_boltzmann(&[1.0; 125], 2.0, 4);
-    let settings = LoopSettings {
-        rebase_events: 997,
-        seed: 3,
-        debug_check_events: 500,
-        skin: 0.2,
-        start_time: 0.0,
-    };
     let n = 20_000;
-    let new = || -> Sim {
-        Simulation::new(DVec3::splat(7.5), &pos, &vel, &[0; 125], model(), settings).unwrap()
-    };
+    let new = || small::new(997, 500);
     let mut straight = new();
     straight
         .run(Stop::Events(2 * n), &mut NoSampler, &mut |_| {})
@@ -417,25 +443,13 @@ fn two_n_events_straight_or_n_plus_checkpoint_plus_n_give_the_same_bits() {
     drop(first);
     let bytes = checkpoint::encode_with_version(&c, CODE_VERSION);
     let c = checkpoint::decode(&bytes).unwrap();
-    let mut resumed = Sim::from_state(model(), &c.sim).unwrap();
+    let mut resumed = small::Sim::from_state(small::model(), &c.sim).unwrap();
     resumed
         .run(Stop::Events(left), &mut NoSampler, &mut |_| {})
         .unwrap();
 
-    assert_eq!(resumed.counters(), straight.counters());
+    small::assert_same(&resumed, &straight);
     assert_eq!(resumed.time().to_bits(), straight.time().to_bits());
-    assert_eq!(resumed.now().to_bits(), straight.now().to_bits());
-    for (a, b) in resumed.bodies().iter().zip(straight.bodies()) {
-        assert_eq!(a, b, "a body differs");
-        assert_eq!(
-            a.r.to_array().map(f64::to_bits),
-            b.r.to_array().map(f64::to_bits)
-        );
-        assert_eq!(
-            a.v.to_array().map(f64::to_bits),
-            b.v.to_array().map(f64::to_bits)
-        );
-    }
     assert_eq!(resumed.images(), straight.images());
     assert_eq!(
         resumed.tracked_potential().to_bits(),
@@ -449,38 +463,12 @@ fn two_n_events_straight_or_n_plus_checkpoint_plus_n_give_the_same_bits() {
 /// and a checkpoint taken there continues bit for bit as the paused simulation does.
 #[test]
 fn a_stop_past_its_grace_re_bases_early_and_its_checkpoint_continues_exactly() {
-    use collide::Particle;
-    use dmd_sim::model::Stepped;
-    use dmd_sim::potential::Potentials;
-    use dmd_sim::simulation::{LoopSettings, NoSampler, Simulation, Stop};
-    use event_queue::{BoundedQueue, LazyQueue, Ticket};
-    use glam::DVec3;
+    use dmd_sim::simulation::{NoSampler, Stop};
     use std::sync::Arc;
     use std::sync::atomic::AtomicBool;
     use std::time::Duration;
-    type Sim = Simulation<Stepped, LazyQueue<BoundedQueue<Ticket>>>;
 
-    let pots = || {
-        Potentials::from_tables(
-            1,
-            &[((0, 0), vec![[1.0, f64::INFINITY], [1.2, 0.5], [1.5, -1.0]])],
-        )
-    };
-    let model = || Stepped::new(pots(), vec![Particle::new(1.0).unwrap()], 125);
-    let pos: Vec<DVec3> = (0..125)
-        .map(|i| DVec3::new(f64::from(i % 5), f64::from(i / 5 % 5), f64::from(i / 25)) * 1.5 + 0.3)
-        .collect();
-    let vel = dmd_sim::init::maxwell_boltzmann(&[1.0; 125], 2.0, 4);
-    let settings = LoopSettings {
-        rebase_events: 1_000_000,
-        seed: 3,
-        debug_check_events: 0,
-        skin: 0.2,
-        start_time: 0.0,
-    };
-    let new = || -> Sim {
-        Simulation::new(DVec3::splat(7.5), &pos, &vel, &[0; 125], model(), settings).unwrap()
-    };
+    let new = || small::new(1_000_000, 0);
     let raised = Arc::new(AtomicBool::new(true));
 
     // A long grace: the 30 000 events hold no scheduled re-basing, so the run is not stopped.
@@ -507,7 +495,7 @@ fn a_stop_past_its_grace_re_bases_early_and_its_checkpoint_continues_exactly() {
     assert_eq!(stopped.counters().rebases, 1);
 
     // Saved there and resumed, against the paused simulation itself going on.
-    let mut resumed = Sim::from_state(model(), &stopped.save_state()).unwrap();
+    let mut resumed = small::Sim::from_state(small::model(), &stopped.save_state()).unwrap();
     stopped.set_stop_request(None, Duration::ZERO);
     stopped
         .run(Stop::Events(30_000 - at), &mut NoSampler, &mut |_| {})
@@ -515,18 +503,7 @@ fn a_stop_past_its_grace_re_bases_early_and_its_checkpoint_continues_exactly() {
     resumed
         .run(Stop::Events(30_000 - at), &mut NoSampler, &mut |_| {})
         .unwrap();
-    assert_eq!(resumed.counters(), stopped.counters());
-    assert_eq!(resumed.now().to_bits(), stopped.now().to_bits());
-    for (a, b) in resumed.bodies().iter().zip(stopped.bodies()) {
-        assert_eq!(
-            a.r.to_array().map(f64::to_bits),
-            b.r.to_array().map(f64::to_bits)
-        );
-        assert_eq!(
-            a.v.to_array().map(f64::to_bits),
-            b.v.to_array().map(f64::to_bits)
-        );
-    }
+    small::assert_same(&resumed, &stopped);
     assert!(stopped.counters().step_in > 100, "the steps took part");
 }
 
