@@ -439,7 +439,7 @@ fn rods_monte_carlo(n: usize, step: f64, sweeps: usize, seed: u64) -> (f64, f64)
 /// The paper's rods on kT/2 terraces against the Monte Carlo: ⟨V⟩/N only (their smooth
 /// estimators switch the potential in `r_e`, which the check leaves to the `dmd-vs-smd` one).
 /// Appends its report to `out`; returns whether it passed.
-fn rods_case(quick: bool, out: &mut String) -> bool {
+fn rods_case(quick: bool, out: &mut String) -> Result<bool, String> {
     let n = 216;
     let step = 0.5 * rods::KT;
     let (runs, equilibration, production, chains, sweeps) = if quick {
@@ -462,41 +462,13 @@ fn rods_case(quick: bool, out: &mut String) -> bool {
         "output.orientation_acf=".into(),
     ];
     let wall = Instant::now();
-    let runs: Result<Vec<Summary>, String> = (1..=runs)
-        .into_par_iter()
-        .map(|seed| {
-            let mut o = overrides.clone();
-            o.push(format!("seed={seed}"));
-            let (scene, base) = Scene::load(&scene_path, &o).map_err(|e| e.to_string())?;
-            run_scene(&scene, &base, None, &mut Quiet).map_err(|e| e.to_string())
-        })
-        .collect();
-    let runs = match runs {
-        Ok(r) => r,
-        Err(e) => {
-            let _ = writeln!(out, "**FAIL**: rods-paper.toml: {e}\n");
-            return false;
-        }
-    };
+    let runs = run_seeds(&scene_path, &overrides, runs)?;
     let dmd_wall = wall.elapsed().as_secs_f64();
     let parts: Vec<(f64, f64)> = (1..=chains)
         .into_par_iter()
         .map(|seed| rods_monte_carlo(n, step, sweeps, seed))
         .collect();
     let mc_wall = wall.elapsed().as_secs_f64() - dmd_wall;
-    let values: Vec<f64> = runs.iter().map(|s| s.potential_energy_per_body).collect();
-    let (dmd, scatter) = mean_error(&values);
-    let reported = runs
-        .iter()
-        .map(|s| s.potential_energy_per_body_error.unwrap_or(f64::NAN))
-        .sum::<f64>()
-        / runs.len() as f64
-        / (values.len() as f64).sqrt();
-    let dmd_error = scatter.max(reported);
-    let (mc, mc_error) = combine(&parts);
-    let diff = dmd - mc;
-    let z = diff / (dmd_error * dmd_error + mc_error * mc_error).sqrt();
-    let pass = z.is_finite() && z.abs() <= SIGMAS;
     let cpu: f64 = runs.iter().map(|s| s.cpu_seconds).sum();
     let _ = writeln!(
         out,
@@ -510,17 +482,63 @@ fn rods_case(quick: bool, out: &mut String) -> bool {
         dmd_wall,
         mc_wall
     );
+    let _ = writeln!(out, "{TABLE_HEAD}");
+    let per_run: Vec<(f64, f64)> = runs
+        .iter()
+        .map(|s| {
+            (
+                s.potential_energy_per_body,
+                s.potential_energy_per_body_error.unwrap_or(f64::NAN),
+            )
+        })
+        .collect();
+    let pass = compare(out, "terraced ⟨V⟩/N (kJ/mol)", &per_run, &parts);
+    let _ = writeln!(out);
+    Ok(pass)
+}
+
+/// Runs `scene` with `overrides` once for each seed `1..=runs`, in parallel, as `dmd run` does.
+fn run_seeds(scene: &Path, overrides: &[String], runs: u64) -> Result<Vec<Summary>, String> {
+    let name = scene
+        .file_name()
+        .map_or_else(String::new, |f| f.to_string_lossy().into_owned());
+    (1..=runs)
+        .into_par_iter()
+        .map(|seed| {
+            let mut o = overrides.to_vec();
+            o.push(format!("seed={seed}"));
+            let (scene, base) = Scene::load(scene, &o).map_err(|e| format!("{name}: {e}"))?;
+            run_scene(&scene, &base, None, &mut Quiet).map_err(|e| format!("{name}: {e}"))
+        })
+        .collect()
+}
+
+/// The head of each comparison table.
+const TABLE_HEAD: &str = "| quantity | event-driven | Monte Carlo | difference | in standard errors | |\n\
+                          |---|---|---|---|---|---|";
+
+/// One row of a comparison table: the event-driven runs' `(value, reported error)` against
+/// the Monte Carlo chains' `(mean, error)`. The runs' mean carries the larger of their
+/// standard error and their mean reported error over √runs; the row passes when the
+/// difference is within [`SIGMAS`] combined errors. Writes the row; returns whether it passed.
+fn compare(out: &mut String, name: &str, per_run: &[(f64, f64)], chains: &[(f64, f64)]) -> bool {
+    let values: Vec<f64> = per_run.iter().map(|p| p.0).collect();
+    let (dmd, scatter) = mean_error(&values);
+    let reported = per_run.iter().map(|p| p.1).sum::<f64>()
+        / per_run.len() as f64
+        / (values.len() as f64).sqrt();
+    let dmd_error = scatter.max(reported);
+    let (mc, mc_error) = combine(chains);
+    let diff = dmd - mc;
+    let z = diff / (dmd_error * dmd_error + mc_error * mc_error).sqrt();
+    let pass = z.is_finite() && z.abs() <= SIGMAS;
     let _ = writeln!(
         out,
-        "| quantity | event-driven | Monte Carlo | difference | in standard errors | |\n\
-         |---|---|---|---|---|---|\n\
-         | terraced ⟨V⟩/N (kJ/mol) | {} ± {} | {} ± {} | {:+.5} | {:+.2} | {} |\n",
+        "| {name} | {} ± {} | {} ± {} | {diff:+.5} | {z:+.2} | {} |",
         sig(dmd),
         sig(dmd_error),
         sig(mc),
         sig(mc_error),
-        diff,
-        z,
         if pass { "ok" } else { "**FAIL**" }
     );
     pass
@@ -568,19 +586,10 @@ fn main() -> ExitCode {
             "output.rdf=".into(),
         ];
         let wall = Instant::now();
-        let runs: Result<Vec<Summary>, String> = (1..=case.runs)
-            .into_par_iter()
-            .map(|seed| {
-                let mut o = overrides.clone();
-                o.push(format!("seed={seed}"));
-                let (scene, base) = Scene::load(&scene_path, &o).map_err(|e| e.to_string())?;
-                run_scene(&scene, &base, None, &mut Quiet).map_err(|e| e.to_string())
-            })
-            .collect();
-        let runs = match runs {
+        let runs = match run_seeds(&scene_path, &overrides, case.runs) {
             Ok(r) => r,
             Err(e) => {
-                eprintln!("stepped-lj.toml: {e}");
+                eprintln!("{e}");
                 return ExitCode::FAILURE;
             }
         };
@@ -638,41 +647,21 @@ fn main() -> ExitCode {
             case.sweeps,
             mc_wall
         );
-        let _ = writeln!(
-            out,
-            "| quantity | event-driven | Monte Carlo | difference | in standard errors | |\n\
-             |---|---|---|---|---|---|"
-        );
+        let _ = writeln!(out, "{TABLE_HEAD}");
         for (name, get, pick) in quantities {
             let per_run: Vec<(f64, f64)> = runs.iter().map(get).collect();
-            let values: Vec<f64> = per_run.iter().map(|p| p.0).collect();
-            let (dmd, scatter) = mean_error(&values);
-            let reported = per_run.iter().map(|p| p.1).sum::<f64>()
-                / per_run.len() as f64
-                / (values.len() as f64).sqrt();
-            let dmd_error = scatter.max(reported);
             let parts: Vec<(f64, f64)> = chains.iter().map(pick).collect();
-            let (mc, mc_error) = combine(&parts);
-            let diff = dmd - mc;
-            let sigma = (dmd_error * dmd_error + mc_error * mc_error).sqrt();
-            let z = diff / sigma;
-            let pass = z.is_finite() && z.abs() <= SIGMAS;
-            ok &= pass;
-            let _ = writeln!(
-                out,
-                "| {name} | {} ± {} | {} ± {} | {:+.5} | {:+.2} | {} |",
-                sig(dmd),
-                sig(dmd_error),
-                sig(mc),
-                sig(mc_error),
-                diff,
-                z,
-                if pass { "ok" } else { "**FAIL**" }
-            );
+            ok &= compare(&mut out, name, &per_run, &parts);
         }
         let _ = writeln!(out);
     }
-    ok &= rods_case(quick, &mut out);
+    match rods_case(quick, &mut out) {
+        Ok(pass) => ok &= pass,
+        Err(e) => {
+            eprintln!("{e}");
+            return ExitCode::FAILURE;
+        }
+    }
     print!("{out}");
     if ok {
         ExitCode::SUCCESS
