@@ -8,8 +8,8 @@
 //! configurational pressure W/(3V) must agree within the statistics at any ΔV, however far the
 //! terraced model is from the continuous one: a wrong terrace map, impulse, thermostat or
 //! estimator shows as a difference. The Monte Carlo's terraced potential is
-//! V = ΔV·⌊U/ΔV + ½⌋ where the Lennard-Jones U < core, a hard core where U ≥ core, and 0
-//! beyond the outermost level (U > −ΔV/2 at r > σ); the smooth potential is U cut and switched
+//! V = ΔV·⌊U/ΔV + ½⌋ where the Lennard-Jones U < core (0 beyond the outermost level, where
+//! |U| < ΔV/2) and a hard core where U ≥ core; the smooth potential is U cut and switched
 //! by a cubic between 2.5σ and 3σ, as the smd engine's.
 //!
 //! The paper's rods (`scenes/rods-paper.toml`, kT/2 terraces) are compared the same way in
@@ -125,9 +125,7 @@ fn terraced(r2: f64, step: f64) -> f64 {
     if u >= CORE {
         return f64::INFINITY;
     }
-    if r2 > 1.0 && u > -0.5 * step {
-        return 0.0;
-    }
+    // |U| < ΔV/2 rounds to the zero terrace: beyond the outermost level V = 0.
     step * (u / step + 0.5).floor()
 }
 
@@ -316,9 +314,7 @@ mod rods {
         if u >= CORE {
             return f64::INFINITY;
         }
-        if u > -0.5 * step && r > SIGMA {
-            return 0.0;
-        }
+        // No test on r: near-parallel rods beyond σ can still be deep in the repulsion.
         step * (u / step + 0.5).floor()
     }
 }
