@@ -1,6 +1,13 @@
-//! The cell list: the box cut into at least 3 × 3 × 3 cells no thinner than the interaction
-//! reach, so that a body can only interact with bodies in its own and the 26 adjacent cells
-//! (000 §III.B).
+//! The cell list: the box cut into cells no thinner than the interaction reach, so that a body
+//! can only interact with bodies in its own and the 26 adjacent cells (000 §III.B).
+//!
+//! Along an axis with three cells or more the 27 cells around a body are distinct. A box
+//! between two and three reaches wide gets two cells along that axis: the cell below and the
+//! cell above are then the same cell, visited twice with shifts one box length apart. At most
+//! one of the two images of a body lies within the reach (the box is at least two reaches
+//! wide), so a scan that keeps only partners within the reach, as every neighbour-list scan
+//! does, finds each pair once; a scan that does not look at distances must visit each cell
+//! once ([`CellGrid::for_each_distinct_neighbour_cell`]).
 //!
 //! Bodies move between cells only at cell-crossing events, whose times come analytically from
 //! the linear motion of the centre. A cell's bodies are kept in a fixed-stride slot array (one
@@ -42,7 +49,7 @@ pub fn unpack(p: u32) -> [u32; 3] {
 /// The grid of cells and which bodies are in each.
 #[derive(Clone, Debug)]
 pub struct CellGrid {
-    /// Cells along each axis (≥ 3).
+    /// Cells along each axis (≥ 2).
     n: [u32; 3],
     /// Box edge lengths.
     lengths: DVec3,
@@ -64,7 +71,7 @@ impl CellGrid {
     /// (at most [`max_cells`] cells).
     ///
     /// # Errors
-    /// The axis (0, 1, 2) along which fewer than 3 cells fit.
+    /// The axis (0, 1, 2) along which fewer than 2 cells fit.
     pub fn new(lengths: DVec3, reach: f64, n_bodies: usize) -> Result<Self, usize> {
         let n = Self::dims_for(lengths, reach, n_bodies)?;
         let bounds = std::array::from_fn(|a| {
@@ -88,22 +95,29 @@ impl CellGrid {
     }
 
     /// The cells along each axis of the grid [`new`](Self::new) builds: as many as fit at
-    /// least `reach` wide, at most [`MAX_CELLS_PER_AXIS`] per axis and [`max_cells`] in all.
+    /// least `reach` wide, at most [`MAX_CELLS_PER_AXIS`] per axis and [`max_cells`] in all;
+    /// at least 3 along an axis where 3 fit, else 2.
     ///
     /// # Errors
-    /// The axis (0, 1, 2) along which fewer than 3 cells fit.
+    /// The axis (0, 1, 2) along which fewer than 2 cells fit.
     pub fn dims_for(lengths: DVec3, reach: f64, n_bodies: usize) -> Result<[u32; 3], usize> {
         let mut fit = [0.0; 3];
         for a in 0..3 {
             fit[a] = (lengths[a] / reach).floor();
-            if fit[a].is_nan() || fit[a] < 3.0 {
+            if fit[a].is_nan() || fit[a] < 2.0 {
                 return Err(a);
             }
         }
-        Ok(
+        let mut n =
             smd::capped_cell_dims(fit, 3, u64::from(MAX_CELLS_PER_AXIS), max_cells(n_bodies))
-                .map(|k| k as u32),
-        )
+                .map(|k| k as u32);
+        // `capped_cell_dims` gives at least 3; an axis two to three reaches long has room for 2.
+        for a in 0..3 {
+            if fit[a] < 3.0 {
+                n[a] = 2;
+            }
+        }
+        Ok(n)
     }
 
     /// Cells along each axis.
@@ -226,15 +240,8 @@ impl CellGrid {
         [below, (k, 0.0), above]
     }
 
-    /// The neighbour cell across the face `dir` (−1 or +1) of coordinate `k` along `axis`, and
-    /// the shift of positions in it (as [`axis_neighbours`](Self::axis_neighbours)).
-    #[inline(always)]
-    pub fn step(&self, axis: usize, k: u32, up: bool) -> (u32, f64) {
-        let [below, _, above] = self.axis_neighbours(axis, k);
-        if up { above } else { below }
-    }
-
-    /// Calls `f(cell, shift)` for the 27 cells around packed cell `c` (itself included).
+    /// Calls `f(cell, shift)` for the 27 cells around packed cell `c` (itself included); along
+    /// an axis of two cells, the other cell comes twice, with shifts a box length apart.
     #[inline(always)]
     pub fn for_each_neighbour_cell(&self, c: u32, mut f: impl FnMut(usize, DVec3)) {
         let [x, y, z] = unpack(c);
@@ -251,35 +258,24 @@ impl CellGrid {
         }
     }
 
-    /// Calls `f(cell, shift)` for the 9 cells that became adjacent when a body moved into
-    /// packed cell `c` across a face along `axis` in direction `up`: the layer beyond `c`.
-    #[inline(always)]
-    pub fn for_each_new_neighbour_cell(
-        &self,
-        c: u32,
-        axis: usize,
-        up: bool,
-        mut f: impl FnMut(usize, DVec3),
-    ) {
-        let k = unpack(c);
-        let mut lists = [
-            self.axis_neighbours(0, k[0]),
-            self.axis_neighbours(1, k[1]),
-            self.axis_neighbours(2, k[2]),
-        ];
-        let layer = self.step(axis, k[axis], up);
-        lists[axis] = [layer, layer, layer];
-        let [xs, ys, zs] = lists;
-        let (nz, ny, nx) = match axis {
-            0 => (3, 3, 1),
-            1 => (3, 1, 3),
-            _ => (1, 3, 3),
+    /// Calls `f(cell)` once for each distinct cell of the 27 around packed cell `c` (itself
+    /// included): the 27 themselves where every axis has three cells or more, fewer where an
+    /// axis has two and its cells below and above are one.
+    pub fn for_each_distinct_neighbour_cell(&self, c: u32, mut f: impl FnMut(usize)) {
+        let [x, y, z] = unpack(c);
+        let distinct = |axis: usize, k: u32| {
+            let [below, own, above] = self.axis_neighbours(axis, k);
+            let n = if below.0 == above.0 { 2 } else { 3 };
+            ([below.0, own.0, above.0], n)
         };
-        for &(cz, sz) in &zs[..nz] {
-            for &(cy, sy) in &ys[..ny] {
+        let (xs, nx) = distinct(0, x);
+        let (ys, ny) = distinct(1, y);
+        let (zs, nz) = distinct(2, z);
+        for &cz in &zs[..nz] {
+            for &cy in &ys[..ny] {
                 let row = self.n[0] * (cy + self.n[1] * cz);
-                for &(cx, sx) in &xs[..nx] {
-                    f((cx + row) as usize, DVec3::new(sx, sy, sz));
+                for &cx in &xs[..nx] {
+                    f((cx + row) as usize);
                 }
             }
         }
@@ -327,11 +323,16 @@ mod tests {
     #[test]
     fn small_boxes_are_refused_per_axis() {
         assert_eq!(
-            CellGrid::new(DVec3::new(10.0, 2.9, 10.0), 1.0, 10).unwrap_err(),
+            CellGrid::new(DVec3::new(10.0, 1.99, 10.0), 1.0, 10).unwrap_err(),
             1
         );
         let g = CellGrid::new(DVec3::new(10.0, 3.0, 7.5), 1.0, 105).unwrap();
         assert_eq!(g.dims(), [10, 3, 7]);
+        // Two to three reaches: two cells along that axis, the others as before.
+        let g = CellGrid::new(DVec3::new(10.0, 2.9, 7.5), 1.0, 105).unwrap();
+        assert_eq!(g.dims(), [10, 2, 7]);
+        let g = CellGrid::new(DVec3::splat(2.5), 1.0, 105).unwrap();
+        assert_eq!(g.dims(), [2, 2, 2]);
     }
 
     #[test]
@@ -411,20 +412,42 @@ mod tests {
             seen.iter()
                 .any(|&(c, s)| c == above_y && s == DVec3::new(0.0, 4.0, 0.0))
         );
-        // Moving up along z into (0, 3, 4) brings the layer z = 0 (shift +5) into reach.
-        let mut layer = Vec::new();
-        g.for_each_new_neighbour_cell(pack([0, 3, 4]), 2, true, |c, s| layer.push((c, s)));
-        assert_eq!(layer.len(), 9);
-        assert!(
-            layer
-                .iter()
-                .all(|&(c, s)| unpack_linear(&g, c)[2] == 0 && s.z == 5.0)
-        );
     }
 
-    fn unpack_linear(g: &CellGrid, c: usize) -> [u32; 3] {
-        let [nx, ny, _] = g.dims();
-        let c = c as u32;
-        [c % nx, (c / nx) % ny, c / (nx * ny)]
+    #[test]
+    fn an_axis_of_two_cells_visits_the_other_cell_twice_and_distinct_once() {
+        let g = CellGrid::new(DVec3::new(2.5, 4.0, 5.0), 1.0, 30).unwrap();
+        assert_eq!(g.dims(), [2, 4, 5]);
+        for x in 0..2 {
+            let c = pack([x, 1, 2]);
+            let mut seen = Vec::new();
+            g.for_each_neighbour_cell(c, |cell, shift| seen.push((cell, shift)));
+            assert_eq!(seen.len(), 27);
+            // The other x cell, with shifts 0 and ∓2.5 (below and above are one cell).
+            let other = g.linear(pack([1 - x, 1, 2]));
+            let mut shifts: Vec<f64> = seen
+                .iter()
+                .filter(|s| s.0 == other)
+                .map(|s| s.1.x)
+                .collect();
+            shifts.sort_by(f64::total_cmp);
+            let expect = if x == 0 { [-2.5, 0.0] } else { [0.0, 2.5] };
+            assert_eq!(shifts, expect);
+            let mut distinct = Vec::new();
+            g.for_each_distinct_neighbour_cell(c, |cell| distinct.push(cell));
+            let mut cells: Vec<usize> = seen.iter().map(|s| s.0).collect();
+            cells.sort_unstable();
+            cells.dedup();
+            assert_eq!(distinct.len(), 18);
+            distinct.sort_unstable();
+            assert_eq!(distinct, cells);
+        }
+        // Three cells or more on every axis: the 27, each once.
+        let g = CellGrid::new(DVec3::new(3.0, 4.0, 5.0), 1.0, 30).unwrap();
+        let mut distinct = Vec::new();
+        g.for_each_distinct_neighbour_cell(pack([0, 3, 2]), |cell| distinct.push(cell));
+        distinct.sort_unstable();
+        distinct.dedup();
+        assert_eq!(distinct.len(), 27);
     }
 }

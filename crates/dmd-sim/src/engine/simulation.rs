@@ -108,10 +108,10 @@ pub enum SetupError {
         /// The hard-core diameter of the pair.
         core: f64,
     },
-    /// The box is too small for three cells of the interaction reach along an axis.
+    /// The box is too small for two cells of the interaction reach along an axis.
     #[error(
-        "the box side {length} along {axis} is less than 3 × (the interaction range {reach} + twice \
-         the skin {skin}) = {need}: the cell list needs at least three cells along each axis; use \
+        "the box side {length} along {axis} is less than 2 × (the interaction range {reach} + twice \
+         the skin {skin}) = {need}: the cell list needs at least two cells along each axis; use \
          more bodies, a lower density or a smaller run.skin"
     )]
     BoxTooSmall {
@@ -460,7 +460,7 @@ where
                 length: lengths[a],
                 reach,
                 skin,
-                need: 3.0 * list_radius,
+                need: 2.0 * list_radius,
             })?;
         let mut bodies = Vec::with_capacity(n);
         let mut cell_of = Vec::with_capacity(n);
@@ -1604,7 +1604,7 @@ where
         for i in 0..self.bodies.len() as u32 {
             let bi = &self.bodies[i as usize];
             self.cells
-                .for_each_neighbour_cell(self.cell_of[i as usize], |cell, _| {
+                .for_each_distinct_neighbour_cell(self.cell_of[i as usize], |cell| {
                     for &j in self.cells.bodies(cell) {
                         if j > i {
                             let bj = &self.bodies[j as usize];
@@ -1863,6 +1863,11 @@ where
                         if j < i {
                             continue;
                         }
+                        // Along an axis of two cells `j`'s cell comes twice, one box length
+                        // apart: a pair listed under the other image is checked there.
+                        if !listed && self.nbrs.of(i).iter().any(|&e| neighbour::partner(e) == j) {
+                            continue;
+                        }
                         let bj = &self.bodies[j as usize];
                         let dr = ri - (bj.position_at(self.now) + shift);
                         if let Err(e) = self.model.check_pair(
@@ -2088,7 +2093,8 @@ events = 10
         );
         assert!(matches!(r, Err(SetupError::Overlap { i: 0, j: 1, .. })));
         let r: Result<Simulation<_, LazyQueue<HeapQueue<Ticket>>>, _> = Simulation::new(
-            DVec3::new(10.0, 4.0, 10.0),
+            // Cells of 1 + 2 × 0.2: two fit along y = 2.8, not along 2.7.
+            DVec3::new(10.0, 2.7, 10.0),
             &[DVec3::ZERO, DVec3::splat(1.2)],
             &[DVec3::ZERO; 2],
             &[0, 0],

@@ -5,7 +5,7 @@
 use std::path::Path;
 
 use collide::Particle;
-use dmd_sim::model::HardSpheres;
+use dmd_sim::model::{HardSpheres, Stepped};
 use dmd_sim::potential::Potentials;
 use dmd_sim::run::{Quiet, Summary, run_scene};
 use dmd_sim::scene::Scene;
@@ -381,4 +381,89 @@ fn outputs_are_written_with_headers() {
             .ends_with(".partial")
     }));
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A box between two and three interaction reaches wide has two cells along each axis, so a
+/// body's neighbourhood visits the other cell twice, one box length apart. The run must be the
+/// run of the same bodies periodically repeated 2 × 2 × 2 times in a box twice as wide (four
+/// cells along each axis, every neighbourhood distinct): the same positions of each body and
+/// its first replica, eight times the collisions, energies and virial, and a stored potential
+/// energy that its recomputation from the pair levels agrees with (each pair counted once).
+#[test]
+fn a_box_of_two_cells_runs_as_its_periodic_repeat_in_a_box_of_four() {
+    let pots = Potentials::from_tables(1, &[((0, 0), vec![[1.0, f64::INFINITY], [1.5, -1.0]])]);
+    let model = |n| Stepped::new(pots.clone(), vec![Particle::new(1.0).unwrap()], n);
+    // fcc, 2 × 2 × 2 cells of side 2: 32 bodies in a box of 4, nearest neighbours √2 apart.
+    let l = 4.0;
+    let basis = [
+        DVec3::ZERO,
+        DVec3::new(0.5, 0.5, 0.0),
+        DVec3::new(0.5, 0.0, 0.5),
+        DVec3::new(0.0, 0.5, 0.5),
+    ];
+    let mut r = Vec::new();
+    for x in 0..2 {
+        for y in 0..2 {
+            for z in 0..2 {
+                for b in basis {
+                    r.push((DVec3::new(x as f64, y as f64, z as f64) + b + 0.25) * 2.0);
+                }
+            }
+        }
+    }
+    let v = dmd_sim::init::maxwell_boltzmann(&vec![1.0; r.len()], 1.5, 7);
+    let (mut r8, mut v8) = (r.clone(), v.clone());
+    for k in 1..8 {
+        let shift = DVec3::new((k & 1) as f64, ((k >> 1) & 1) as f64, (k >> 2) as f64) * l;
+        r8.extend(r.iter().map(|&p| p + shift));
+        v8.extend_from_slice(&v);
+    }
+    let settings = LoopSettings {
+        rebase_events: u64::MAX,
+        seed: 1,
+        debug_check_events: 64,
+        skin: 0.1,
+        start_time: 0.0,
+    };
+    let go = |lengths: f64, r: &[DVec3], v: &[DVec3]| {
+        let species = vec![0; r.len()];
+        let mut sim: Simulation<_, LazyQueue<BoundedQueue<Ticket>>> = Simulation::new(
+            DVec3::splat(lengths),
+            r,
+            v,
+            &species,
+            model(r.len()),
+            settings,
+        )
+        .unwrap();
+        sim.run(Stop::Time(2.0), &mut NoSampler, &mut |_| {})
+            .unwrap();
+        sim
+    };
+    let small = go(l, &r, &v);
+    let big = go(2.0 * l, &r8, &v8);
+    assert_eq!(small.cells().dims(), [2, 2, 2]);
+    assert_eq!(big.cells().dims(), [4, 4, 4]);
+    for sim in [&small, &big] {
+        sim.check().unwrap();
+        assert_eq!(sim.anomalies().total(), 0);
+        let (stored, recomputed) = (sim.tracked_potential(), sim.potential_energy());
+        assert!((stored - recomputed).abs() < 1e-9, "{stored} {recomputed}");
+    }
+    let (c1, c8) = (small.counters(), big.counters());
+    assert!(c1.pair_events() > 200, "{c1:?}");
+    assert_eq!(8 * c1.pair_events(), c8.pair_events(), "{c1:?} {c8:?}");
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * b.abs().max(1.0);
+    assert!(close(
+        8.0 * small.potential_energy(),
+        big.potential_energy()
+    ));
+    assert!(close(8.0 * small.kinetic_energy(), big.kinetic_energy()));
+    assert!(close(8.0 * small.virial(), big.virial()));
+    let (p1, p8) = (small.positions(), big.positions());
+    for i in 0..r.len() {
+        let mut d = p1[i] - p8[i];
+        d -= (d / l).round() * l;
+        assert!(d.length() < 1e-9, "body {i}: {d}");
+    }
 }

@@ -83,9 +83,9 @@ fn median(mut x: Vec<f64>) -> f64 {
 /// attitudes as fast as they turn; the forces' part grows as the square of the time).
 #[test]
 fn both_engines_start_water_from_the_same_state() {
-    // The event-driven engine needs the scene's 1000 molecules (three cells of its reach).
+    // 512 molecules: a 24.9 Å box, two cells of the event-driven engine's reach and skin.
     let short = [
-        "species.0.count=1000",
+        "species.0.count=512",
         "run.equilibration_time=0",
         "run.time=0.00002",
         "smd.dt=0.00002",
@@ -99,7 +99,7 @@ fn both_engines_start_water_from_the_same_state() {
     run_scene(&dmd, Path::new("."), Some(&dirs[1]), &mut Quiet).unwrap_or_else(|e| panic!("{e}"));
     let (a, b) = (frames(&dirs[0]), frames(&dirs[1]));
     assert_eq!((a.len(), b.len()), (2, 2));
-    assert_eq!(a[0].len(), 1002);
+    assert_eq!(a[0].len(), 514);
     for (k, (x, y)) in a[0].iter().zip(&b[0]).enumerate() {
         assert_eq!(x, y, "line {k} of frame 0");
     }

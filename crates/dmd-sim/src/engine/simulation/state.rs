@@ -276,7 +276,7 @@ where
         let list_radius = reach + 2.0 * settings.skin;
         let cells = CellGrid::new(state.lengths, list_radius, n).map_err(|a| {
             StateError(format!(
-                "the box {} has fewer than 3 cells along axis {a}",
+                "the box {} has fewer than 2 cells along axis {a}",
                 state.lengths
             ))
         })?;
