@@ -24,7 +24,7 @@ pub fn default_window(p: &PotentialSpec) -> (f64, f64) {
 
 /// The default time step of SSD/E water: 2 fs (in ps), the longest round step that meets the
 /// energy criterion of docs/PERFORMANCE.md, std(E)/std(U) ≤ 1 % in NVE production. Measured
-/// on `scenes/water-ssd.toml` (1000 molecules, 298.15 K): after 10 ps of equilibration, 1 ps
+/// on `scenes/water-ssd.toml` with 1000 molecules (298.15 K): after 10 ps of equilibration, 1 ps
 /// of production gives 0.20 % at 1 fs, 0.84 % at 2 fs, 1.4 % at 2.5 fs (the `dt²` of the
 /// splitting); right after the lattice melts (0.2 ps + 0.2 ps) the still relaxing `U`
 /// fluctuates more and the ratios are lower, 0.023, 0.092, 0.38, 0.84 % at 0.5, 1, 2, 3 fs.
