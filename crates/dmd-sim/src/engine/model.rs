@@ -394,6 +394,13 @@ fn enter_time(r2: f64, b: f64, v2: f64, radius2: f64) -> Option<f64> {
     if b >= 0.0 {
         return None;
     }
+    approach_time(r2, b, v2, radius2)
+}
+
+/// [`enter_time`] for a pair known to approach (`b < 0`), without testing it again (a test
+/// the compiler would move before the caller's and branch on).
+#[inline(always)]
+fn approach_time(r2: f64, b: f64, v2: f64, radius2: f64) -> Option<f64> {
     let c = r2 - radius2;
     let disc = b * b - v2 * c;
     if disc <= 0.0 {
@@ -519,15 +526,18 @@ impl PairModel for HardSpheres {
     fn predict_before(&mut self, pair: &Pair, horizon: f64) -> Option<(f64, Kind)> {
         let Pair { si, sj, dr, dv, .. } = *pair;
         let b = dr.dot(dv);
-        if b >= 0.0 {
-            return None;
-        }
         let sigma2 = self.contact2(si, sj);
         let r2 = dr.length_squared();
-        if 2.0 * b * horizon > sigma2 - r2 {
+        // Kept only if approaching (`b < 0`) and able to touch before the horizon
+        // (`2 b · horizon − a < 0`): one test of both sign bits, so one branch, where a test of
+        // each (two branches) is mispredicted about once per two partners (half of them
+        // recede, at random). `b + 0` turns `b = −0` into `+0` (receding); `2 b · horizon = a`
+        // is a touch at the horizon at most (the shell crossing predicts afresh).
+        let d = 2.0 * b * horizon - (sigma2 - r2);
+        if ((b + 0.0).to_bits() & d.to_bits()) >> 63 == 0 {
             return None;
         }
-        enter_time(r2, b, dv.length_squared(), sigma2).map(|t| (t, Kind::Pair(Boundary::Inner)))
+        approach_time(r2, b, dv.length_squared(), sigma2).map(|t| (t, Kind::Pair(Boundary::Inner)))
     }
 
     #[inline(always)]
@@ -943,6 +953,42 @@ mod tests {
                 (None, None) => {}
             }
         }
+    }
+
+    #[test]
+    fn pruning_rejects_receding_pairs_with_a_negative_zero() {
+        // b = dr·dv = −0 (every product −0): receding for the pruned test as for the full one,
+        // also inside the core, where an approaching pair would collide at once.
+        let mut model = HardSpheres::new(
+            Potentials::from_tables(1, &[((0, 0), vec![[1.0, f64::INFINITY]])]),
+            vec![Particle::new(1.0).unwrap()],
+        );
+        for x in [-1.5, -0.9] {
+            let pair = Pair {
+                i: 0,
+                j: 1,
+                si: 0,
+                sj: 0,
+                now: 0.0,
+                dr: DVec3::new(x, -0.0, -0.0),
+                dv: DVec3::new(0.0, 1.0, 0.0),
+            };
+            assert!(pair.dr.dot(pair.dv).is_sign_negative() && pair.dr.dot(pair.dv) == 0.0);
+            assert_eq!(model.predict(&pair), None);
+            assert_eq!(model.predict_before(&pair, 1.0), None);
+        }
+        // Approaching and inside the core by round-off: the event is now, pruned or not.
+        let pair = Pair {
+            i: 0,
+            j: 1,
+            si: 0,
+            sj: 0,
+            now: 0.0,
+            dr: DVec3::new(1.0 - 1e-16, 0.0, 0.0),
+            dv: DVec3::new(-1.0, 0.0, 0.0),
+        };
+        assert_eq!(model.predict_before(&pair, 1.0), model.predict(&pair));
+        assert_eq!(model.predict_before(&pair, 1.0).map(|p| p.0), Some(0.0));
     }
 
     #[test]
