@@ -957,38 +957,34 @@ mod tests {
 
     #[test]
     fn pruning_rejects_receding_pairs_with_a_negative_zero() {
-        // b = dr·dv = −0 (every product −0): receding for the pruned test as for the full one,
-        // also inside the core, where an approaching pair would collide at once.
         let mut model = HardSpheres::new(
             Potentials::from_tables(1, &[((0, 0), vec![[1.0, f64::INFINITY]])]),
             vec![Particle::new(1.0).unwrap()],
         );
-        for x in [-1.5, -0.9] {
-            let pair = Pair {
-                i: 0,
-                j: 1,
-                si: 0,
-                sj: 0,
-                now: 0.0,
-                dr: DVec3::new(x, -0.0, -0.0),
-                dv: DVec3::new(0.0, 1.0, 0.0),
-            };
-            assert!(pair.dr.dot(pair.dv).is_sign_negative() && pair.dr.dot(pair.dv) == 0.0);
-            assert_eq!(model.predict(&pair), None);
-            assert_eq!(model.predict_before(&pair, 1.0), None);
-        }
-        // Approaching and inside the core by round-off: the event is now, pruned or not.
-        let pair = Pair {
+        let pair = |dr: DVec3, dv: DVec3| Pair {
             i: 0,
             j: 1,
             si: 0,
             sj: 0,
             now: 0.0,
-            dr: DVec3::new(1.0 - 1e-16, 0.0, 0.0),
-            dv: DVec3::new(-1.0, 0.0, 0.0),
+            dr,
+            dv,
         };
-        assert_eq!(model.predict_before(&pair, 1.0), model.predict(&pair));
-        assert_eq!(model.predict_before(&pair, 1.0).map(|p| p.0), Some(0.0));
+        // b = dr·dv = −0 (every product −0): receding for the pruned test as for the full one,
+        // also inside the core, where an approaching pair would collide at once.
+        for x in [-1.5, -0.9] {
+            let p = pair(DVec3::new(x, -0.0, -0.0), DVec3::new(0.0, 1.0, 0.0));
+            assert!(p.dr.dot(p.dv).is_sign_negative() && p.dr.dot(p.dv) == 0.0);
+            assert_eq!(model.predict(&p), None);
+            assert_eq!(model.predict_before(&p, 1.0), None);
+        }
+        // Approaching and inside the core by round-off: the event is now, pruned or not.
+        let p = pair(
+            DVec3::new(1.0 - 1e-16, 0.0, 0.0),
+            DVec3::new(-1.0, 0.0, 0.0),
+        );
+        assert_eq!(model.predict_before(&p, 1.0), model.predict(&p));
+        assert_eq!(model.predict_before(&p, 1.0).map(|p| p.0), Some(0.0));
     }
 
     #[test]
