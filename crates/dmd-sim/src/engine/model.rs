@@ -513,7 +513,7 @@ impl PairModel for HardSpheres {
             return None;
         }
         let sigma2 = self.contact2(si, sj);
-        enter_time(dr.length_squared(), b, dv.length_squared(), sigma2)
+        approach_time(dr.length_squared(), b, dv.length_squared(), sigma2)
             .map(|t| (t, Kind::Pair(Boundary::Inner)))
     }
 
