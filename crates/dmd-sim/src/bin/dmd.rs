@@ -22,6 +22,11 @@ use dmd_sim::smd_engine::{self, Engine, SmdSummary};
 use dmd_sim::units::UnitNames;
 use indicatif::{ProgressBar, ProgressStyle};
 
+/// Large arrays (bodies, event and neighbour lists of large systems) on 2 MiB pages: their
+/// accesses come in random order and 4 KiB pages would cost a page-table walk on most of them.
+#[global_allocator]
+static ALLOCATOR: large_pages::LargePages = large_pages::LargePages;
+
 /// The `dmd` command.
 #[derive(Parser)]
 #[command(
