@@ -25,7 +25,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 /// Large arrays (bodies, event and neighbour lists of large systems) on 2 MiB pages: their
 /// accesses come in random order and 4 KiB pages would cost a page-table walk on most of them.
 #[global_allocator]
-static ALLOCATOR: large_pages::LargePages = large_pages::LargePages;
+static ALLOCATOR: memory_hints::LargePages = memory_hints::LargePages;
 
 /// The `dmd` command.
 #[derive(Parser)]

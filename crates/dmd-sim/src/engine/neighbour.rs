@@ -94,6 +94,13 @@ impl NeighbourLists {
         &self.entries[base..base + self.len[i as usize] as usize]
     }
 
+    /// Asks for the first line of body `i`'s entries and its length ahead of use.
+    #[inline(always)]
+    pub fn prefetch(&self, i: u32) {
+        memory_hints::prefetch(&self.len[i as usize]);
+        memory_hints::prefetch(&self.entries[i as usize * self.cap]);
+    }
+
     /// Replaces body `i`'s list.
     pub fn replace(&mut self, i: u32, list: &[u32]) {
         while list.len() > self.cap {

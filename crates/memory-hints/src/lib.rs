@@ -1,8 +1,12 @@
-//! `large-pages`: a global allocator that asks Linux to back large blocks with transparent huge
-//! pages (2 MiB instead of 4 KiB).
+//! `memory-hints`: advice to the kernel and to the processor about memory that a loop reads in
+//! random order: large blocks on transparent huge pages (2 MiB instead of 4 KiB) through a global
+//! allocator, [`LargePages`], and a [`prefetch`] that asks for a cache line without waiting for it.
 //!
-//! **Why.** An event-driven simulation reads its bodies' records, event lists and neighbour lists
-//! in the order the events come, which is random in memory. With 4 KiB pages the processor's
+//! It is the workspace's one crate with `unsafe` code: a global allocator and a prefetch
+//! instruction cannot be had without it. Every unsafe block says why it is sound.
+//!
+//! **Why huge pages.** An event-driven simulation reads its bodies' records, event lists and
+//! neighbour lists in the order the events come, which is random in memory. With 4 KiB pages the processor's
 //! address-translation cache (the TLB, about 1 500 entries, so about 6 MiB of reach) stops
 //! covering those arrays at about 10⁵ bodies, and then nearly every access pays a page-table walk
 //! on top of its cache miss. With 2 MiB pages the same arrays need a few dozen entries.
@@ -15,17 +19,26 @@
 //! is only advice: where the kernel refuses it (huge pages off or not built in) the block is
 //! ordinary memory and nothing fails. On other systems the blocks are only aligned.
 //!
-//! **What it costs.** A large block takes up to 2 MiB more memory than it asks for (the last huge
-//! page is whole), and growing or shrinking one copies it unless the rounded size stays the same.
+//! **Huge pages cost** memory: a large block takes up to 2 MiB more than it asks for (the last
+//! huge page is whole), and growing or shrinking one copies it unless the rounded size stays the
+//! same.
 //! Small requests are passed through untouched.
+//!
+//! **Prefetches** matter once the records no longer fit in the L2 cache: an event-driven loop
+//! knows which records its next step reads (the next body's, its partners') before it reads
+//! them. A load would wait for each miss and hold up the instructions behind it; a prefetch only
+//! starts the transfer, and the loop goes on with the present event meanwhile.
 //!
 //! ```
 //! #[global_allocator]
-//! static ALLOCATOR: large_pages::LargePages = large_pages::LargePages;
+//! static ALLOCATOR: memory_hints::LargePages = memory_hints::LargePages;
 //!
 //! // Served from 2 MiB pages: 8 MiB of records read in random order.
 //! let records = vec![0u64; 1 << 20];
-//! assert_eq!(records.as_ptr() as usize % large_pages::HUGE_PAGE, 0);
+//! assert_eq!(records.as_ptr() as usize % memory_hints::HUGE_PAGE, 0);
+//!
+//! // The record read next, asked for now.
+//! memory_hints::prefetch(&records[123_456]);
 //! ```
 
 use std::alloc::{GlobalAlloc, Layout, System};
@@ -131,6 +144,23 @@ unsafe impl GlobalAlloc for LargePages {
     }
 }
 
+/// Asks the processor to bring the cache line holding `x` towards its L1 cache, without
+/// waiting for it: unlike a load, a prefetch never holds up the instructions after it, so a loop
+/// can ask for the records its next steps will read and go on working while they come.
+#[inline(always)]
+pub fn prefetch<T>(x: &T) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: `prefetcht0` is a hint: it reads nothing into registers, writes nothing and never
+    // faults (here the address is even a live reference); it needs only SSE, which every x86-64
+    // processor has.
+    unsafe {
+        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+        _mm_prefetch::<_MM_HINT_T0>((x as *const T).cast());
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = x;
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -197,6 +227,16 @@ mod tests {
             !little_flags.split_whitespace().any(|f| f == "hg"),
             "VmFlags of the small block: {little_flags}"
         );
+    }
+
+    #[test]
+    fn a_prefetch_changes_nothing() {
+        let records: Vec<u64> = (0..4096).collect();
+        for r in records.iter().rev() {
+            prefetch(r);
+        }
+        prefetch(&records);
+        assert!(records.iter().enumerate().all(|(i, &r)| r == i as u64));
     }
 
     proptest! {
