@@ -609,13 +609,18 @@ impl PairModel for HardSpheres {
     }
 }
 
-/// The level of a pair at separation `dr` on a stepped potential, or its overlap.
+/// The level of a pair at separation `dr` on a stepped potential, or its overlap. A pair
+/// inside the core by round-off ([`OVERLAP_TOLERANCE`]) is at contact: a configuration written
+/// at a collision and read back from text sits there, and the loop makes its event at once.
 fn setup_stepped(pot: &StepPotential, dr: DVec3) -> Result<usize, PairSetupError> {
     let d = dr.length();
     if let Some(core) = pot.core()
         && d < core
     {
-        return Err(PairSetupError::Overlap { distance: d, core });
+        if d * d < core * core * (1.0 - OVERLAP_TOLERANCE) {
+            return Err(PairSetupError::Overlap { distance: d, core });
+        }
+        return Ok(pot.level_at(core));
     }
     Ok(pot.level_at(d))
 }

@@ -2081,6 +2081,36 @@ events = 10
         sim.check().unwrap();
     }
 
+    /// A start written at a collision and read back from text has pairs inside the core by
+    /// round-off: they start at contact (and part at once if they approach); a real overlap is
+    /// still refused.
+    #[test]
+    fn a_start_inside_the_core_by_round_off_is_at_contact() {
+        for (d, accepted) in [
+            (1.0 - 1e-13, true),
+            (1.0 - 1e-11, true),
+            (1.0 - 1e-7, false),
+        ] {
+            let model = HardSpheres::new(hs_potentials(), vec![Particle::new(1.0).unwrap()]);
+            let pos = [DVec3::new(4.0, 5.0, 5.0), DVec3::new(4.0 + d, 5.0, 5.0)];
+            let vel = [DVec3::new(1.0, 0.0, 0.0), DVec3::new(-1.0, 0.0, 0.0)];
+            let r: Result<Simulation<_, LazyQueue<HeapQueue<Ticket>>>, _> =
+                Simulation::new(DVec3::splat(10.0), &pos, &vel, &[0, 0], model, settings());
+            let Ok(mut sim) = r else {
+                assert!(!accepted, "refused at distance {d}");
+                assert!(matches!(r, Err(SetupError::Overlap { i: 0, j: 1, .. })));
+                continue;
+            };
+            assert!(accepted, "accepted at distance {d}");
+            sim.run(Stop::Events(1), &mut NoSampler, &mut |_| {})
+                .unwrap();
+            assert_eq!(sim.counters().core, 1);
+            assert_eq!(sim.time(), 0.0);
+            assert_eq!(sim.bodies()[0].v, DVec3::new(-1.0, 0.0, 0.0));
+            sim.check().unwrap();
+        }
+    }
+
     #[test]
     fn overlapping_start_and_small_box_are_refused() {
         let model = HardSpheres::new(hs_potentials(), vec![Particle::new(1.0).unwrap()]);
