@@ -800,8 +800,8 @@ where
         // A body with itself ([`PairModel::self_pairs`]).
         let own = M::SELF_PAIRS && i == j;
         if self.prefetches() {
-            self.touch(i);
-            self.touch(j);
+            self.prefetch_partners(i);
+            self.prefetch_partners(j);
         }
         let now = self.now;
         let (iu, ju) = (i as usize, j as usize);
@@ -1156,9 +1156,9 @@ where
 
     // ----- prediction ----------------------------------------------------------------------------
 
-    /// Whether the loop prefetches ([`touch`](Self::touch), the next body's record and lists):
-    /// while the working set (records, neighbour lists, event lists) fits in L2 the prefetches
-    /// only cost instructions (hard spheres at N = 1372: 1.08 of the CPU time with them);
+    /// Whether the loop prefetches ([`prefetch_partners`](Self::prefetch_partners), the next
+    /// body's record and lists): while the working set (records, neighbour lists, event lists)
+    /// fits in L2 the prefetches only cost instructions (hard spheres at N = 1372: 1.08 of the CPU time with them);
     /// beyond it they hide the misses (stepped fluids at N = 4000 with their longer lists, and
     /// every larger system).
     #[inline(always)]
@@ -1173,9 +1173,9 @@ where
     /// its event list): they are all in flight at once (with 10⁵ bodies the records are rarely
     /// in L2), and the prediction then finds them in L1. Prefetches rather than loads, because
     /// a load that misses holds up every instruction after it until it arrives (0.87 of the
-    /// CPU time at N = 87 808 against touching the records with loads).
+    /// CPU time at N = 87 808 against reading a word of each record).
     #[inline(always)]
-    fn touch(&self, i: u32) {
+    fn prefetch_partners(&self, i: u32) {
         self.lists.prefetch(i);
         for &e in self.nbrs.of(i) {
             memory_hints::prefetch(&self.bodies[neighbour::partner(e) as usize]);
