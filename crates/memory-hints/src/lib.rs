@@ -209,6 +209,16 @@ mod tests {
             eprintln!("skipped: this kernel has no transparent huge pages");
             return;
         }
+        // A process may have them switched off (prctl PR_SET_THP_DISABLE, inherited): the kernel
+        // then refuses the advice, as it should.
+        let status = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
+        if status
+            .lines()
+            .any(|l| l.split_whitespace().collect::<Vec<_>>() == ["THP_enabled:", "0"])
+        {
+            eprintln!("skipped: transparent huge pages are switched off for this process");
+            return;
+        }
         let large = Layout::from_size_align(3 * HUGE_PAGE + 12, 8).unwrap();
         let small = Layout::from_size_align(64 << 10, 8).unwrap();
         // SAFETY: non-zero layouts, freed below with the same layouts.
