@@ -15,7 +15,10 @@
 //! verified misses when the scene verifies its searches) never qualifies, whatever its
 //! averages say. The recommended value of each knob is its cheapest qualifying one, by CPU
 //! seconds of production per unit of simulated time; a quantity too noisy at this probe length
-//! to be shown within the target is named as not certified and left out of the judgement.
+//! to be shown within the target is named as not certified and left out of the judgement, and
+//! when no coarser probe meets the target in U/N and P together, the cheapest that meets it in
+//! one of them (U/N first) is recommended for that one, the other named as not certified with
+//! why (really off, too noisy, or not decided at this length).
 //!
 //! After this first pass, the probes whose noise alone keeps a knob from certifying U/N and P
 //! are lengthened ([`lengthening`]: the knob's cheapest coarser probe that is within the
@@ -833,18 +836,26 @@ fn deviations(rows: &mut [Row]) {
 
 /// The recommended row of one knob's judged rows (the reference last) with the observables
 /// (U/N, P) it certifies within the budget: the cheapest row within it in every certifiable
-/// observable ([`certifiable`]); the reference, certifying nothing, when no observable is
-/// certifiable or no coarser row qualifies. `None` when the reference gave no value.
+/// observable ([`certifiable`]); failing that, the cheapest coarser row within it in one of
+/// them, U/N before P, the other then named as not certified (a user who asked for 2 % gets
+/// the setting that meets it in U/N, and is told that P is not shown at that setting, rather
+/// than the finest probe with no claim at all); the reference, certifying nothing, when no
+/// observable is certifiable or no coarser row qualifies in any. `None` when the reference
+/// gave no value.
 fn decide(rows: &[&Row], budget: f64) -> Option<(usize, [bool; 2])> {
     let n = rows.len();
     if !matches!(rows.last().map(|r| &r.probe), Some(Ok(_))) {
         return None;
     }
     let which = certifiable(rows, budget);
-    match cheapest_within_of(rows, budget, which) {
-        Some(r) if r + 1 < n => Some((r, which)),
-        _ => Some((n - 1, [false, false])),
-    }
+    let tries = [which, [which[0], false], [false, which[1]]];
+    tries
+        .into_iter()
+        .find_map(|w| match cheapest_within_of(rows, budget, w) {
+            Some(r) if r + 1 < n => Some((r, w)),
+            _ => None,
+        })
+        .or(Some((n - 1, [false, false])))
 }
 
 /// Fills in the deviations of the rows of one knob (its last row is the reference) and
@@ -1452,31 +1463,66 @@ impl Tuning {
                             })
                             .filter(|x| x.is_finite())
                             .fold(f64::INFINITY, f64::min);
-                        if u > self.budget && reach < self.budget {
-                            let _ = writeln!(
-                                out,
-                                "# {}: {name} is not certified: the standard error of its \
-                                 difference from the finest probe is at best {:.2} % at this \
-                                 probe length, above the target, so no setting can be shown \
-                                 within it (probes about {:.0} times longer would tell: a larger \
-                                 --budget, or --time); the recommendation rests on {other} alone.",
-                                knob.label,
+                        // A rule knob's other probes are the other rules at the scene's ΔV,
+                        // judged against the scene's rule at the finest ΔV.
+                        let others = if knob.choices.is_empty() {
+                            "coarser probe"
+                        } else {
+                            "other rule"
+                        };
+                        let why = if reach >= self.budget {
+                            format!(
+                                "every {others} differs from the reference by more than the \
+                                 target (at two standard errors, by {:.2} % at least), so longer \
+                                 probes would not qualify one; a finer setting than the tune \
+                                 probes (tune again from a finer scene value) would be needed \
+                                 for {name} within the target",
+                                100.0 * reach.max(0.0),
+                            )
+                        } else if u > self.budget {
+                            format!(
+                                "the standard error of its difference from the reference is at \
+                                 best {:.2} % at this probe length, above the target, so no \
+                                 setting can be shown within it (probes about {:.0} times longer \
+                                 would tell: a larger --budget, or --time)",
                                 100.0 * u,
                                 (u / self.budget).powi(2).ceil().max(2.0),
-                            );
+                            )
                         } else {
-                            let _ = writeln!(
-                                out,
-                                "# {}: {name} is not certified: every coarser probe differs from \
-                                 the finest by more than the target (at two standard errors, by \
-                                 {:.2} % at least), so longer probes would not qualify one; a \
-                                 finer setting than the tune probes (tune again from a finer \
-                                 scene value) would be needed for {name} within the target. The \
-                                 recommendation rests on {other} alone.",
-                                knob.label,
-                                100.0 * reach.max(0.0),
-                            );
-                        }
+                            // Precise enough to judge, and no other probe shown within: the
+                            // closest (smallest bound) says how far, and how much longer
+                            // probes would have to be if its difference is within.
+                            let closest = rows[..rows.len() - 1]
+                                .iter()
+                                .filter_map(|r| r.deviations.map(|d| d[q]))
+                                .filter(|d| d.bound().is_finite())
+                                .min_by(|a, b| a.bound().total_cmp(&b.bound()));
+                            format!(
+                                "no {others} is shown within the target in it at this probe \
+                                 length (the closest differs from the reference by {} %, and \
+                                 may be within only if that is noise){}",
+                                closest.map_or("?".to_owned(), percent),
+                                match closest.filter(|d| d.error < self.budget) {
+                                    Some(d) => format!(
+                                        "; probes about {:.0} times longer would tell (a larger \
+                                         --budget, or --time)",
+                                        (d.uncertainty / (self.budget - d.error))
+                                            .powi(2)
+                                            .ceil()
+                                            .max(2.0)
+                                    ),
+                                    None => String::new(),
+                                }
+                            )
+                        };
+                        let _ = writeln!(
+                            out,
+                            "# {}: {name} is not certified: {why}. The recommendation rests on \
+                             {other} alone; at the recommended setting {name} differs from the \
+                             reference by {} %.",
+                            knob.label,
+                            row.deviations.map_or("?".to_owned(), |d| percent(d[q])),
+                        );
                     }
                     let sets = knob.recommend(row.value);
                     if sets.is_empty() {
@@ -2109,5 +2155,74 @@ mod tests {
             );
             assert!(text.contains("--set pair.0.terraces.step=0"), "{text}");
         }
+    }
+    #[test]
+    fn a_quantity_precise_but_not_shown_within_leaves_the_other_to_recommend() {
+        let step = delta_v_knob();
+        let text_of = |rows: Vec<Row>, r: usize, which: [bool; 2]| {
+            Tuning {
+                knobs: vec![step.clone()],
+                rows,
+                target: 0.02,
+                budget: 0.02,
+                recommended: vec![Some(r)],
+                certified: vec![which],
+                units: UnitNames::of(crate::config::scene::UnitSystem::Reduced),
+                length: String::new(),
+                smooth: true,
+                wall_budget: WALL_BUDGET,
+                wall_seconds: 0.0,
+                lengthened: Vec::new(),
+            }
+            .recommendation()
+        };
+        // P 1.5 ± 0.8 % at every coarser probe against 2 %: precise enough to judge (so P is
+        // certifiable), none shown within (bound 2.3 %), none shown off (1.5 − 1.6 < 2). U/N
+        // alone recommends the cheapest; P is named undecided, with the length that would tell:
+        // (0.8 / (2 − 1.5))² = 2.56, so 3 times.
+        let rows = p_rows([0.015, 0.015, 0.015], [0.008, 0.008, 0.008]);
+        let refs: Vec<&Row> = rows.iter().collect();
+        assert_eq!(certifiable(&refs, 0.02), [true, true]);
+        assert_eq!(decide(&refs, 0.02), Some((0, [true, false])));
+        let text = text_of(rows, 0, [true, false]);
+        assert!(
+            text.contains("P is not certified: no coarser probe is shown within"),
+            "{text}"
+        );
+        assert!(text.contains("1.50 ± 0.80 %"), "{text}");
+        assert!(text.contains("about 3 times longer would tell"), "{text}");
+        assert!(
+            text.contains(
+                "at the recommended setting P differs from the reference by 1.50 ± 0.80 %"
+            ),
+            "{text}"
+        );
+        assert!(text.contains("error ≤ 0.00 % in U/N,"), "{text}");
+        // 3.5 ± 0.8 %: within only if noise, and no length would show it within.
+        let rows = p_rows([0.035, 0.035, 0.035], [0.008, 0.008, 0.008]);
+        let refs: Vec<&Row> = rows.iter().collect();
+        assert_eq!(decide(&refs, 0.02), Some((0, [true, false])));
+        let text = text_of(rows, 0, [true, false]);
+        assert!(
+            text.contains("may be within only if that is noise)."),
+            "{text}"
+        );
+        assert!(!text.contains("times longer"), "{text}");
+        // U/N off everywhere and P within at the second probe: P alone recommends it.
+        let mut rows = p_rows([0.03, 0.01, 0.03], [0.002, 0.002, 0.002]);
+        for r in &mut rows[..3] {
+            r.deviations.as_mut().unwrap()[0] = Deviation {
+                error: 0.05,
+                uncertainty: 0.002,
+            };
+        }
+        let refs: Vec<&Row> = rows.iter().collect();
+        assert_eq!(decide(&refs, 0.02), Some((1, [false, true])));
+        // Neither within at any coarser probe: the finest, certifying nothing.
+        for r in &mut rows[..3] {
+            r.deviations.as_mut().unwrap()[1].error = 0.05;
+        }
+        let refs: Vec<&Row> = rows.iter().collect();
+        assert_eq!(decide(&refs, 0.02), Some((3, [false, false])));
     }
 }
