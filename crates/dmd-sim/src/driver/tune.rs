@@ -1917,20 +1917,13 @@ mod tests {
                 r
             })
             .collect();
-        let mut t = Tuning {
-            knobs: vec![step, rule],
+        let mut t = tuning(
+            vec![step, rule],
             rows,
-            target: 0.01,
-            budget: 0.01,
-            recommended: vec![Some(2), Some(7)],
-            certified: vec![[true, false], [false, false]],
-            units: UnitNames::of(crate::config::scene::UnitSystem::Reduced),
-            length: String::new(),
-            smooth: true,
-            wall_budget: WALL_BUDGET,
-            wall_seconds: 0.0,
-            lengthened: Vec::new(),
-        };
+            0.01,
+            vec![Some(2), Some(7)],
+            vec![[true, false], [false, false]],
+        );
         // The ΔV knob's claim stands: the rule knob keeps the scene's rule.
         assert_eq!(t.certified_all(), [true, false]);
         assert_eq!(t.recommended_sets(), ["pair.0.terraces.step=0.25"]);
@@ -2119,9 +2112,46 @@ mod tests {
         assert_eq!(Production::Scene.times(2.0), None);
     }
 
+    /// A tuning of `knobs` with `rows` at `target`, recommending `recommended` certified in
+    /// `certified` (knob by knob), in reduced units.
+    fn tuning(
+        knobs: Vec<Knob>,
+        rows: Vec<Row>,
+        target: f64,
+        recommended: Vec<Option<usize>>,
+        certified: Vec<[bool; 2]>,
+    ) -> Tuning {
+        Tuning {
+            knobs,
+            rows,
+            target,
+            budget: target,
+            recommended,
+            certified,
+            units: UnitNames::of(crate::config::scene::UnitSystem::Reduced),
+            length: String::new(),
+            smooth: true,
+            wall_budget: WALL_BUDGET,
+            wall_seconds: 0.0,
+            lengthened: Vec::new(),
+        }
+    }
+
+    /// The recommendation text of one ΔV knob (`delta_v_knob`) with `rows`, judged at
+    /// `target`, recommending row `r` certified in `which`.
+    fn recommendation_of(rows: Vec<Row>, target: f64, r: usize, which: [bool; 2]) -> String {
+        tuning(
+            vec![delta_v_knob()],
+            rows,
+            target,
+            vec![Some(r)],
+            vec![which],
+        )
+        .recommendation()
+    }
+
     #[test]
     fn an_uncertified_quantity_is_named_with_why_noise_or_a_real_difference() {
-        let step = delta_v_knob();
         // P 0.5 ± 1.5 % at the two coarse probes: noise (the difference could be within 1 %).
         let noisy = p_rows([0.005, 0.005, 0.005], [0.015, 0.015, 0.015]);
         // P 5.8 ± 1.2 %: off at two standard errors, whatever the length.
@@ -2131,21 +2161,7 @@ mod tests {
             // U/N alone is judged: the cheapest probe is recommended in U/N.
             let (r, which) = decide(&refs, 0.01).unwrap();
             assert_eq!((r, which), (0, [true, false]));
-            let t = Tuning {
-                knobs: vec![step.clone()],
-                rows,
-                target: 0.01,
-                budget: 0.01,
-                recommended: vec![Some(r)],
-                certified: vec![which],
-                units: UnitNames::of(crate::config::scene::UnitSystem::Reduced),
-                length: String::new(),
-                smooth: true,
-                wall_budget: WALL_BUDGET,
-                wall_seconds: 0.0,
-                lengthened: Vec::new(),
-            };
-            let text = t.recommendation();
+            let text = recommendation_of(rows, 0.01, r, which);
             assert!(text.contains("P is not certified"), "{text}");
             assert_eq!(text.contains("times longer would tell"), noise, "{text}");
             assert_eq!(
@@ -2156,26 +2172,10 @@ mod tests {
             assert!(text.contains("--set pair.0.terraces.step=0"), "{text}");
         }
     }
+
     #[test]
     fn a_quantity_precise_but_not_shown_within_leaves_the_other_to_recommend() {
-        let step = delta_v_knob();
-        let text_of = |rows: Vec<Row>, r: usize, which: [bool; 2]| {
-            Tuning {
-                knobs: vec![step.clone()],
-                rows,
-                target: 0.02,
-                budget: 0.02,
-                recommended: vec![Some(r)],
-                certified: vec![which],
-                units: UnitNames::of(crate::config::scene::UnitSystem::Reduced),
-                length: String::new(),
-                smooth: true,
-                wall_budget: WALL_BUDGET,
-                wall_seconds: 0.0,
-                lengthened: Vec::new(),
-            }
-            .recommendation()
-        };
+        let text_of = |rows, r, which| recommendation_of(rows, 0.02, r, which);
         // P 1.5 ± 0.8 % at every coarser probe against 2 %: precise enough to judge (so P is
         // certifiable), none shown within (bound 2.3 %), none shown off (1.5 − 1.6 < 2). U/N
         // alone recommends the cheapest; P is named undecided, with the length that would tell:
