@@ -330,6 +330,20 @@ impl Deviation {
     pub fn bound(&self) -> f64 {
         self.error + self.uncertainty
     }
+
+    /// How many times longer the runs behind this deviation would have to be for its bound to
+    /// fall within `budget`, if its difference alone is within it (errors shrink as the square
+    /// root of the length): 1 when the bound is within already; `None` when the difference is
+    /// not within `budget` or the uncertainty is unknown.
+    pub fn longer(&self, budget: f64) -> Option<f64> {
+        if self.bound() <= budget {
+            return Some(1.0);
+        }
+        if self.error >= budget || self.uncertainty.is_nan() {
+            return None;
+        }
+        Some((self.uncertainty / (budget - self.error)).powi(2))
+    }
 }
 
 /// One row of the table: a knob at one value.
@@ -1239,17 +1253,8 @@ impl Distinct {
 /// error bound to fall within `budget`, if its difference alone is within it (errors shrink as
 /// the square root of the length); `None` if it already qualifies or its difference does not.
 pub fn longer(row: &Row, budget: f64) -> Option<f64> {
-    let d = row.deviations?;
-    let mut factor: f64 = 1.0;
-    for d in d {
-        if d.bound() <= budget {
-            continue;
-        }
-        if d.error >= budget || d.uncertainty.is_nan() {
-            return None;
-        }
-        factor = factor.max((d.uncertainty / (budget - d.error)).powi(2));
-    }
+    let [u, p] = row.deviations?;
+    let factor = u.longer(budget)?.max(p.longer(budget)?);
     (factor > 1.0).then_some(factor)
 }
 
@@ -1470,6 +1475,13 @@ impl Tuning {
                         } else {
                             "other rule"
                         };
+                        // The coarser probe closest to the target in this quantity (smallest
+                        // bound).
+                        let closest = rows[..rows.len() - 1]
+                            .iter()
+                            .filter_map(|r| r.deviations.map(|d| d[q]))
+                            .filter(|d| d.bound().is_finite())
+                            .min_by(|a, b| a.bound().total_cmp(&b.bound()));
                         let why = if reach >= self.budget {
                             format!(
                                 "every {others} differs from the reference by more than the \
@@ -1488,28 +1500,28 @@ impl Tuning {
                                 100.0 * u,
                                 (u / self.budget).powi(2).ceil().max(2.0),
                             )
+                        } else if let Some(d) = closest.filter(|d| d.bound() <= self.budget) {
+                            // Another probe meets the target in this quantity, but none meets
+                            // it in both, and the recommendation went by the other.
+                            format!(
+                                "it is within the target only at another {others} (by {} %), \
+                                 which is not within it in {other}",
+                                percent(d)
+                            )
                         } else {
                             // Precise enough to judge, and no other probe shown within: the
-                            // closest (smallest bound) says how far, and how much longer
-                            // probes would have to be if its difference is within.
-                            let closest = rows[..rows.len() - 1]
-                                .iter()
-                                .filter_map(|r| r.deviations.map(|d| d[q]))
-                                .filter(|d| d.bound().is_finite())
-                                .min_by(|a, b| a.bound().total_cmp(&b.bound()));
+                            // closest says how far, and how much longer probes would have to
+                            // be if its difference is within.
                             format!(
                                 "no {others} is shown within the target in it at this probe \
                                  length (the closest differs from the reference by {} %, and \
                                  may be within only if that is noise){}",
                                 closest.map_or("?".to_owned(), percent),
-                                match closest.filter(|d| d.error < self.budget) {
-                                    Some(d) => format!(
+                                match closest.and_then(|d| d.longer(self.budget)) {
+                                    Some(f) => format!(
                                         "; probes about {:.0} times longer would tell (a larger \
                                          --budget, or --time)",
-                                        (d.uncertainty / (self.budget - d.error))
-                                            .powi(2)
-                                            .ceil()
-                                            .max(2.0)
+                                        f.ceil().max(2.0)
                                     ),
                                     None => String::new(),
                                 }
@@ -2218,6 +2230,22 @@ mod tests {
         }
         let refs: Vec<&Row> = rows.iter().collect();
         assert_eq!(decide(&refs, 0.02), Some((1, [false, true])));
+        // U/N within at the first probe only, P at the second only: U/N recommends the first,
+        // and P is said to be within at another probe, not at the recommended one.
+        let mut both = p_rows([0.05, 0.01, 0.05], [0.002, 0.002, 0.002]);
+        both[1].deviations.as_mut().unwrap()[0].error = 0.05;
+        both[2].deviations.as_mut().unwrap()[0].error = 0.05;
+        let refs: Vec<&Row> = both.iter().collect();
+        assert_eq!(decide(&refs, 0.02), Some((0, [true, false])));
+        let text = text_of(both, 0, [true, false]);
+        assert!(
+            text.contains(
+                "P is not certified: it is within the target only at another coarser probe \
+                 (by 1.00 ± 0.20 %), which is not within it in U/N"
+            ),
+            "{text}"
+        );
+        assert!(!text.contains("times longer"), "{text}");
         // Neither within at any coarser probe: the finest, certifying nothing.
         for r in &mut rows[..3] {
             r.deviations.as_mut().unwrap()[1].error = 0.05;
