@@ -193,6 +193,7 @@ impl PairPotential for LennardJones {
             dx,
             ddx,
             third: flight.distance_third_bound(h),
+            spread: 0.0,
         })
     }
 

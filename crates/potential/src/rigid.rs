@@ -32,6 +32,7 @@
 
 use glam::{DQuat, DVec3};
 
+use crate::certify::{RigidFlight, TaylorModel};
 use crate::{PairEval, PairGeometry, PairPotential, PotentialError};
 
 /// Where two rigid bodies are relative to each other: the separation `r_ij = r_i − r_j` (lab
@@ -137,6 +138,26 @@ pub trait RigidPairPotential {
     /// [`PotentialError::LevelAtZero`] for `u_k = 0`, [`PotentialError::NotFinite`] for a
     /// non-finite level, and what the implementation's search may return.
     fn reach(&self, u_k: f64) -> Result<f64, PotentialError>;
+
+    /// Certified event prediction for bodies of any shape ([`certify`](crate::certify)): a
+    /// model of `U` itself over the window `[0, h]` of `flight`, `U(τ) ∈ U + U̇τ ± Kτ²/2` with
+    /// `K` ([`TaylorModel::spread`]) bounding `|Ü|` on the whole window (`ddx` and `third`
+    /// zero). `None` (the default): no certificate, engines rely on their root searches.
+    ///
+    /// The contract, property-tested for the potentials that implement it: for every
+    /// `τ ∈ [0, h]` of the exact free motion that `flight` bounds,
+    /// `|U(τ) − U − U̇τ| ≤ Kτ²/2`.
+    fn taylor_model(&self, flight: &RigidFlight, h: f64) -> Option<TaylorModel> {
+        let _ = (flight, h);
+        None
+    }
+
+    /// Whether [`taylor_model`](Self::taylor_model) offers models at all: engines skip setting
+    /// up a [`RigidFlight`] (the two attitudes and spins at the window's start) where it does
+    /// not. `false` by default.
+    fn certifies(&self) -> bool {
+        false
+    }
 }
 
 /// [`RigidPairPotential::reach`] from monotone envelopes of `U` (the site-based potentials):
@@ -187,6 +208,14 @@ impl<P: RigidPairPotential + ?Sized> RigidPairPotential for &P {
     }
     fn reach(&self, u_k: f64) -> Result<f64, PotentialError> {
         (**self).reach(u_k)
+    }
+    #[inline]
+    fn taylor_model(&self, flight: &RigidFlight, h: f64) -> Option<TaylorModel> {
+        (**self).taylor_model(flight, h)
+    }
+    #[inline]
+    fn certifies(&self) -> bool {
+        (**self).certifies()
     }
 }
 

@@ -202,6 +202,7 @@ impl PairPotential for LjRod {
             dx: rd - 2.0 * z * c * cd,
             ddx: rdd - 2.0 * z * (cd * cd + c * cdd),
             third: flight.distance_third_bound(h) + 8.0 * z * w * w * w,
+            spread: 0.0,
         })
     }
 

@@ -60,6 +60,7 @@
 
 use glam::DVec3;
 
+use crate::certify::{RigidFlight, TaylorModel};
 use crate::error::{non_negative, positive};
 use crate::rigid::{RigidGeometry, RigidPairPotential};
 use crate::solve::golden_min;
@@ -225,10 +226,18 @@ struct Term {
     b: usize,
     /// `|a| + |b|`: the site distance is within this of the centre distance.
     arm: f64,
+    /// `|a|` and `|b|` apart, for the certified model's speeds.
+    arm_a: f64,
+    arm_b: f64,
     /// `K q_a q_b` (0 for no Coulomb term).
     coulomb: f64,
     lj: Option<LjTerm>,
 }
+
+/// The first site distance of the tables of [`SiteSite::derivative_bounds_at`] (Å).
+const BOUNDS_START: f64 = 0.5;
+/// Their spacing (Å): the bound at a distance is read at the grid point at or below it.
+const BOUNDS_STEP: f64 = 0.01;
 
 /// The pair potential of two like rigid molecules of sites: site–site Lennard-Jones and damped
 /// shifted force Coulomb (module documentation). A [`RigidPairPotential`].
@@ -264,6 +273,10 @@ pub struct SiteSite {
     minimum: f64,
     barrier: f64,
     length: f64,
+    /// Per term, [`derivative_bounds`](Self::derivative_bounds) at `BOUNDS_START +
+    /// g·BOUNDS_STEP` for `g < grid` (to `R_c`), the terms one after the other.
+    bounds: Vec<(f64, f64)>,
+    grid: usize,
 }
 
 impl SiteSite {
@@ -337,6 +350,8 @@ impl SiteSite {
                     a,
                     b,
                     arm: sa.position.length() + sb.position.length(),
+                    arm_a: sa.position.length(),
+                    arm_b: sb.position.length(),
                     coulomb: q,
                     lj,
                 });
@@ -361,8 +376,19 @@ impl SiteSite {
             minimum: 0.0,
             barrier: f64::INFINITY,
             length: if length > 0.0 { length } else { cutoff },
+            bounds: Vec::new(),
+            grid: 0,
         };
         (out.minimum, out.barrier) = out.minimum_behind_barrier()?;
+        out.grid = ((r_cut - BOUNDS_START) / BOUNDS_STEP).ceil().max(0.0) as usize + 1;
+        out.bounds = out
+            .terms
+            .iter()
+            .flat_map(|t| {
+                (0..out.grid)
+                    .map(|g| out.derivative_bounds(t, BOUNDS_START + g as f64 * BOUNDS_STEP))
+            })
+            .collect();
         Ok(out)
     }
 
@@ -403,6 +429,49 @@ impl SiteSite {
         } else {
             libm::erfc(self.dsf.alpha * r) / r - self.c_shift + self.c_slope * (r - self.dsf.r_cut)
         }
+    }
+
+    /// Bounds on `|u'|` and `|u''|` of site pair `t` over site distances in `[d, R_c)`, both
+    /// attained at `d` because every envelope below decreases. Coulomb, with `f = erfc(αr)/r`,
+    /// `E = erfc(αr)` and `g = (2α/√π)e^{−α²r²}` (so `E' = −g`, `g' = −2α²rg`):
+    /// `u_C' = Kq_aq_b(f' − f'(R_c))` with `|f'| = g/r + E/r²` decreasing and `f' ≤ f'(R_c) < 0`
+    /// below `R_c`, so `|u_C'| ≤ K|q_aq_b|(|f'(d)| − |f'(R_c)|)`; `u_C'' = Kq_aq_b f''` with
+    /// `f'' = 2α²g + 2g/r² + 2E/r³`, positive and decreasing. Lennard-Jones, with `s = σ/r`:
+    /// `|φ'| ≤ 4ε(12s¹² + 6s⁶)/r`, `|φ''| ≤ 4ε(156s¹² + 42s⁶)/r²`, and `u_LJ' = φ' − φ'(R_c)`.
+    #[inline]
+    fn derivative_bounds(&self, t: &Term, d: f64) -> (f64, f64) {
+        let (mut d1, mut d2) = (0.0, 0.0);
+        let inv = 1.0 / d;
+        if t.coulomb != 0.0 {
+            let e = libm::erfc(self.dsf.alpha * d);
+            let g = self.two_a_sqrt_pi * (-self.alpha2 * d * d).exp();
+            let q = t.coulomb.abs();
+            d1 += q * (g * inv + e * inv * inv - self.c_slope).max(0.0);
+            d2 += q * 2.0 * (self.alpha2 * g + g * inv * inv + e * inv * inv * inv);
+        }
+        if let Some(lj) = &t.lj {
+            let s2 = lj.sigma2 * inv * inv;
+            let s6 = s2 * s2 * s2;
+            let s12 = s6 * s6;
+            d1 += lj.four_eps * (12.0 * s12 + 6.0 * s6) * inv + lj.slope.abs();
+            d2 += lj.four_eps * (156.0 * s12 + 42.0 * s6) * inv * inv;
+        }
+        (d1, d2)
+    }
+
+    /// [`derivative_bounds`](Self::derivative_bounds) of `t` at `d`, read from its table at
+    /// the grid point at or below `d` (the envelopes decrease, so that bound holds at `d`),
+    /// computed directly below the table.
+    #[inline]
+    fn derivative_bounds_at(&self, index: usize, t: &Term, d: f64) -> (f64, f64) {
+        let k = ((d - BOUNDS_START) / BOUNDS_STEP).floor();
+        if k.is_nan() || k < 0.0 || self.grid == 0 {
+            return self.derivative_bounds(t, d);
+        }
+        let k = (k as usize).min(self.grid - 1);
+        // The grid point as the table computed it must not lie beyond `d` by round-off.
+        let k = k - usize::from(k > 0 && BOUNDS_START + k as f64 * BOUNDS_STEP > d);
+        self.bounds[index * self.grid + k]
     }
 
     /// A lower bound on `U` for centre distances in `[lo, hi]`: the attractive Coulomb pairs
@@ -598,6 +667,69 @@ impl RigidPairPotential for SiteSite {
                 "the energy or its derivatives overflow binary64",
             ))
         }
+    }
+
+    /// `U(τ) ∈ U + U̇τ ± Kτ²/2` over `[0, h]` ([`RigidPairPotential::taylor_model`]). Each
+    /// site pair's distance `d` has `Ü = Σ (u''ḋ² + u'd̈)`, with `|ḋ| ≤ S` (the flight's
+    /// [`point_speed`](RigidFlight::point_speed) of its two arms), `d ≥ d₀ − Sh` on the window
+    /// and `|d̈| = |(|ḋ_vec|² − ḋ²)/d + d̂·d̈_vec| ≤ S²/d + A` (`A` the
+    /// [`point_acceleration`](RigidFlight::point_acceleration)); `|u'|` and `|u''|` are bounded
+    /// at that closest distance ([`derivative_bounds`](Self::derivative_bounds)). A site pair
+    /// that stays beyond `R_c` adds nothing; `u''` jumps where one crosses `R_c` while `u` and
+    /// `u'` are continuous, which a second-order remainder allows. `None` where a site pair
+    /// may come within `10⁻³ Å` (the bounds are useless there).
+    fn taylor_model(&self, f: &RigidFlight, h: f64) -> Option<TaylorModel> {
+        let g = RigidGeometry::new(f.r, f.q_i, f.q_j);
+        let e = self.evaluate(&g).ok()?;
+        let x = e.energy;
+        let dx = e.rate(f.v, f.w_i, f.w_j);
+        let vrel = f.v.length();
+        // Centres that stay beyond the molecular cut-off: U ≡ 0 on the whole window.
+        if f.r.length() - vrel * h >= self.cutoff {
+            return Some(TaylorModel {
+                x,
+                dx,
+                ddx: 0.0,
+                third: 0.0,
+                spread: 0.0,
+            });
+        }
+        let n = self.sites.len();
+        let mut arm_i = [DVec3::ZERO; MAX_SITES];
+        let mut arm_j = [DVec3::ZERO; MAX_SITES];
+        for (k, s) in self.sites.iter().enumerate() {
+            arm_i[k] = f.q_i * s.position;
+            arm_j[k] = f.q_j * s.position;
+        }
+        let (arm_i, arm_j) = (&arm_i[..n], &arm_j[..n]);
+        let rc = self.dsf.r_cut;
+        let mut k = 0.0;
+        for (index, t) in self.terms.iter().enumerate() {
+            let d0 = (f.r + arm_i[t.a] - arm_j[t.b]).length();
+            let speed = vrel + f.spin_i * t.arm_a + f.spin_j * t.arm_b;
+            let d_lo = d0 - speed * h;
+            if d_lo >= rc {
+                continue;
+            }
+            if d_lo.is_nan() || d_lo <= 1e-3 {
+                return None;
+            }
+            let accel = f.point_acceleration(t.arm_a, t.arm_b);
+            let (d1, d2) = self.derivative_bounds_at(index, t, d_lo);
+            k += d2 * speed * speed + d1 * (speed * speed / d_lo + accel);
+        }
+        k.is_finite().then_some(TaylorModel {
+            x,
+            dx,
+            ddx: 0.0,
+            third: 0.0,
+            spread: k,
+        })
+    }
+
+    #[inline]
+    fn certifies(&self) -> bool {
+        true
     }
 
     /// A rigorous lower bound on `U` outside the barrier (module documentation).

@@ -108,6 +108,15 @@ pub fn tops_model<P: RigidPairPotential>(
         (Some(q), Some(w)) => (q, w),
         (q, _) => tops_start(scene, &inertia, body_species, q),
     };
+    let mut settings = search_settings(scene);
+    if scene.search.as_ref().and_then(|s| s.horizon).is_none() {
+        let certified = tables.iter().all(|(_, t)| t.potential().0.certifies());
+        settings.horizon = if certified {
+            DEFAULT_TOP_HORIZON_WINDOWS * settings.window
+        } else {
+            0.0
+        };
+    }
     Terraced::new(
         species,
         tables,
@@ -115,7 +124,7 @@ pub fn tops_model<P: RigidPairPotential>(
         &poses,
         &omegas,
         0.0,
-        search_settings(scene),
+        settings,
         scene.seed ^ 0x5ea2_c400_0000_0007,
     )
     .map_err(|e| SceneError::invalid("search", e.to_string()))
@@ -509,6 +518,14 @@ pub(crate) fn terrace_map<P: PairPotential, F: Fn(f64) -> f64>(
 /// Default of `search.horizon` in windows: how far certified prediction may jump ahead in
 /// one call (measured on the paper's rods, docs/PERFORMANCE.md).
 pub const DEFAULT_HORIZON_WINDOWS: f64 = 2.0;
+
+/// Default of `search.horizon` for rigid tops on a potential with models (site–site
+/// molecules; elsewhere the horizon is unused), in windows. A model of `U` itself costs about
+/// one evaluation and proves short stretches; on water each molecule changes every fraction of
+/// a femtosecond, so proving a third of a window (0.67 fs on SPC/E) with one model and
+/// certifying again at the virtual event beats longer jumps and the search alike
+/// (docs/PERFORMANCE.md, *Certified prediction of rigid molecules*).
+pub const DEFAULT_TOP_HORIZON_WINDOWS: f64 = 1.0 / 3.0;
 
 /// Default of `search.max_change`: steps limited to where `U` is predicted to cross at most
 /// this fraction of the terrace's width (see `docs/VALIDATION.md` for the misses and the cost

@@ -578,6 +578,13 @@ impl Top {
     fn quat(orientation: &DMat3) -> DQuat {
         DQuat::from_mat3(orientation).normalize()
     }
+
+    /// `(W, Ẇ)`: bounds on `|ω|` and `|ω̇|` at every time of this motion
+    /// ([`potential::certify::torque_free_bounds`]), for certified prediction.
+    #[inline]
+    pub fn spin_bounds(&self) -> (f64, f64) {
+        potential::certify::torque_free_bounds(self.0.moments().get(), self.0.initial_pose().omega)
+    }
 }
 
 impl Rotor for Top {
