@@ -674,7 +674,7 @@ impl RigidPairPotential for SiteSite {
     /// [`point_speed`](RigidFlight::point_speed) of its two arms), `d ≥ d₀ − Sh` on the window
     /// and `|d̈| = |(|ḋ_vec|² − ḋ²)/d + d̂·d̈_vec| ≤ S²/d + A` (`A` the
     /// [`point_acceleration`](RigidFlight::point_acceleration)); `|u'|` and `|u''|` are bounded
-    /// at that closest distance ([`derivative_bounds`](Self::derivative_bounds)). A site pair
+    /// at that closest distance (decreasing envelopes, tabulated every 0.01 Å). A site pair
     /// that stays beyond `R_c` adds nothing; `u''` jumps where one crosses `R_c` while `u` and
     /// `u'` are continuous, which a second-order remainder allows. `None` where a site pair
     /// may come within `10⁻³ Å` (the bounds are useless there).
