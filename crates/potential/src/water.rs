@@ -52,6 +52,7 @@
 
 use glam::{DQuat, DVec3};
 
+use crate::certify::{RigidFlight, TaylorModel};
 use crate::error::{non_negative, positive};
 use crate::lennard_jones::energy_and_virial;
 use crate::pair::{Invariants, Partials, assemble};
@@ -493,6 +494,110 @@ impl RigidPairPotential for SoftStickyDipole {
                 "the energy or its derivatives overflow binary64",
             ))
         }
+    }
+
+    /// `U(τ) ∈ U + U̇τ ± Kτ²/2` over `[0, h]` ([`RigidPairPotential::taylor_model`]), with `K`
+    /// from bounds `(|f|, |ḟ|, |f̈|)` of every factor along the flight, combined by the product
+    /// rule `(fg)¨ = f̈g + 2ḟġ + fg̈`. Over the window the centre distance lies in
+    /// `[r_lo, r_hi] = r ∓ |v|h`, with `|ṙ| ≤ |v|` and `|r̈| ≤ |v|²/r_lo`; `r̂` has
+    /// `|r̂̇| ≤ |v|/r` and `|r̂̈| ≤ 4|v|²/r²`; a body axis `e` has `|ė| ≤ W` and
+    /// `|ë| ≤ Ẇ + W²` (the flight's spin bounds), and the partner direction in a body frame,
+    /// `c = Qᵀ(±r̂)`, has `|ċ| ≤ |v|/r + W` and `|c̈| ≤ 4|v|²/r² + 2W|v|/r + Ẇ + W²`. Radial
+    /// factors (`u_LJ`, `r⁻³`, the switches) use decreasing envelopes at `r_lo` or, for the
+    /// cubic switches, `|S'| ≤ 1.5/w` and `|S''| ≤ 6/w²` where `[r_lo, r_hi]` meets their
+    /// window; `ẑ_i·ẑ_j − 3(ẑ_i·r̂)(ẑ_j·r̂)` is at most 2; `w_a = 2c_z(c_x² − c_y²)` has
+    /// `|∇| ≤ 2.31` and `‖∇²‖ ≤ √32` on the unit ball, `(c_z − 0.6)²(c_z + 0.8)²` has `|′| ≤
+    /// 3.168` and `|″| ≤ 12.56` on `[−1, 1]`. `None` inside half a diameter.
+    fn taylor_model(&self, f: &RigidFlight, h: f64) -> Option<TaylorModel> {
+        // (|f|, |ḟ|, |f̈|) of a factor and the product and sum rules.
+        type B = (f64, f64, f64);
+        let mul = |a: B, b: B| -> B {
+            (
+                a.0 * b.0,
+                a.1 * b.0 + a.0 * b.1,
+                a.2 * b.0 + 2.0 * a.1 * b.1 + a.0 * b.2,
+            )
+        };
+        let add = |a: B, b: B| -> B { (a.0 + b.0, a.1 + b.1, a.2 + b.2) };
+        let scale = |k: f64, a: B| -> B { (k * a.0, k * a.1, k * a.2) };
+        let e = self.evaluate(&RigidGeometry::new(f.r, f.q_i, f.q_j)).ok()?;
+        let (x, dx) = (e.energy, e.rate(f.v, f.w_i, f.w_j));
+        let model = |spread| TaylorModel {
+            x,
+            dx,
+            ddx: 0.0,
+            third: 0.0,
+            spread,
+        };
+        let speed = f.v.length();
+        let r0 = f.r.length();
+        let (lo, hi) = (r0 - speed * h, r0 + speed * h);
+        if lo >= self.p.r_cut {
+            return Some(model(0.0));
+        }
+        if lo.is_nan() || lo <= 0.5 * self.p.sigma {
+            return None;
+        }
+        let v2 = speed * speed;
+        // A radial factor from sup |f|, |f'|, |f''| over [lo, hi].
+        let radial = |f0: f64, f1: f64, f2: f64| -> B { (f0, f1 * speed, f2 * v2 + f1 * v2 / lo) };
+        let switch = |c: &Cubic| -> B {
+            if hi <= c.lo {
+                (1.0, 0.0, 0.0)
+            } else if lo >= c.hi {
+                (0.0, 0.0, 0.0)
+            } else {
+                let w = c.hi - c.lo;
+                radial(1.0, 1.5 / w, 6.0 / (w * w))
+            }
+        };
+        let (n1, n2) = (speed / lo, 4.0 * v2 / (lo * lo));
+        let (wi, wj) = (f.spin_i, f.spin_j);
+        let (ai, aj) = (f.turn_i + wi * wi, f.turn_j + wj * wj);
+        // Lennard-Jones and the dipole, switched by g.
+        let inv = 1.0 / lo;
+        let s2 = self.sigma2 * inv * inv;
+        let s6 = s2 * s2 * s2;
+        let s12 = s6 * s6;
+        let lj = radial(
+            self.four_eps * (s12 + s6),
+            self.four_eps * (12.0 * s12 + 6.0 * s6) * inv,
+            self.four_eps * (156.0 * s12 + 42.0 * s6) * inv * inv,
+        );
+        let inv3 = inv * inv * inv;
+        let r3 = radial(inv3, 3.0 * inv3 * inv, 12.0 * inv3 * inv * inv);
+        let angular: B = (
+            2.0,
+            (wi + wj) + 3.0 * ((wi + n1) + (wj + n1)),
+            (ai + 2.0 * wi * wj + aj)
+                + 3.0
+                    * ((ai + 2.0 * wi * n1 + n2)
+                        + 2.0 * (wi + n1) * (wj + n1)
+                        + (aj + 2.0 * wj * n1 + n2)),
+        );
+        let dipole = scale(self.mu2, mul(r3, angular));
+        let mut k = mul(switch(&self.g), add(lj, dipole)).2;
+        // The sticky terms of both molecules.
+        if lo < self.sticky_range {
+            let direction = |w: f64, a: f64| (n1 + w, n2 + 2.0 * w * n1 + a);
+            let ((ci1, ci2), (cj1, cj2)) = (direction(wi, ai), direction(wj, aj));
+            let tetra = |c1: f64, c2: f64| -> B {
+                (0.5 * W_MAX, 2.31 * c1, 32f64.sqrt() * c1 * c1 + 2.31 * c2)
+            };
+            let correction = |c1: f64, c2: f64| -> B {
+                (W_PRIME_PART_MAX, 3.168 * c1, 12.56 * c1 * c1 + 3.168 * c2)
+            };
+            let w = add(tetra(ci1, ci2), tetra(cj1, cj2));
+            let wp = add(correction(ci1, ci2), correction(cj1, cj2));
+            k += 0.5 * self.p.nu0 * mul(switch(&self.s), w).2
+                + 0.5 * self.p.nu0_prime * mul(switch(&self.s_prime), wp).2;
+        }
+        k.is_finite().then(|| model(k))
+    }
+
+    #[inline]
+    fn certifies(&self) -> bool {
+        true
     }
 
     /// A rigorous lower bound (module documentation): `−43.51 kJ/mol` for SSD/E, below the

@@ -519,10 +519,10 @@ pub(crate) fn terrace_map<P: PairPotential, F: Fn(f64) -> f64>(
 /// one call (measured on the paper's rods, docs/PERFORMANCE.md).
 pub const DEFAULT_HORIZON_WINDOWS: f64 = 2.0;
 
-/// Default of `search.horizon` for rigid tops on a potential with models (site–site
-/// molecules; elsewhere the horizon is unused), in windows. A model of `U` itself costs about
+/// Default of `search.horizon` for rigid tops on a potential with models (the water models;
+/// elsewhere the horizon is 0), in windows. A model of `U` itself costs about
 /// one evaluation and proves short stretches; on water each molecule changes every fraction of
-/// a femtosecond, so proving a third of a window (0.67 fs on SPC/E) with one model and
+/// a femtosecond, so proving a third of a window (0.67 fs on SPC/E and SSD/E) with one model and
 /// certifying again at the virtual event beats longer jumps and the search alike
 /// (docs/PERFORMANCE.md, *Certified prediction of rigid molecules*).
 pub const DEFAULT_TOP_HORIZON_WINDOWS: f64 = 1.0 / 3.0;

@@ -1459,13 +1459,51 @@ mod tests {
         }
     }
 
+    /// Checks the certified model of a rigid potential along the exact free motion of a pair
+    /// of tops: `|U(τ) − U − U̇τ| ≤ Kτ²/2` at 200 points of the window.
+    #[allow(clippy::too_many_arguments)]
+    fn check_rigid_model<R: RigidPairPotential>(
+        pot: &Rigid<R>,
+        moments: DVec3,
+        r: DVec3,
+        v: DVec3,
+        (qa, qb): (DQuat, DQuat),
+        (wa, wb): (DVec3, DVec3),
+        h: f64,
+    ) -> Result<(), TestCaseError> {
+        use crate::models::rotor::TopInertia;
+        let inertia = TopInertia::new(moments).unwrap();
+        let ri = Top::start(&inertia, qa.normalize(), wa).unwrap();
+        let rj = Top::start(&inertia, qb.normalize(), wb).unwrap();
+        let Some(m) = pot.taylor_model(r, v, (&ri, 0.0), (&rj, 0.0), h) else {
+            return Ok(());
+        };
+        prop_assert!(m.ddx == 0.0 && m.third == 0.0 && m.spread >= 0.0);
+        let energy = |tau: f64| pot.energy(r + v * tau, &ri.pose(tau), &rj.pose(tau));
+        prop_assert!((energy(0.0) - m.x).abs() <= 1e-12 * (1.0 + m.x.abs()));
+        if m.x.abs() >= 1e4 {
+            return Ok(());
+        }
+        for k in 1..=200 {
+            let tau = h * f64::from(k) / 200.0;
+            let rest = energy(tau) - m.x - m.dx * tau;
+            let bound = 0.5 * m.spread * tau * tau;
+            prop_assert!(
+                rest.abs() <= bound + 1e-9 * (1.0 + m.x.abs()),
+                "τ = {tau}: remainder {rest} beyond {bound} (K = {})",
+                m.spread
+            );
+        }
+        Ok(())
+    }
+
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(96))]
-        /// The certified model of a rigid site–site potential (SPC/E water, asymmetric tops)
-        /// holds along the exact free motion: `|U(τ) − U − U̇τ| ≤ Kτ²/2` on the whole window,
-        /// from contact to beyond the cut-off, at thermal and at ten times thermal spin.
+        /// The certified models of the rigid water potentials (SPC/E's sites, SSD/E's dipole
+        /// and sticky terms; asymmetric tops) hold along the exact free motion, from contact
+        /// to beyond the cut-off, at thermal and at ten times thermal spin.
         #[test]
-        fn rigid_site_model_bounds_the_exact_motion(
+        fn rigid_water_models_bound_the_exact_motion(
             dir in prop::array::uniform3(-1.0f64..1.0),
             dist in 2.4f64..11.5,
             v in prop::array::uniform3(-8.0f64..8.0),
@@ -1476,34 +1514,23 @@ mod tests {
             fast in prop::bool::ANY,
             h in 1e-4f64..2e-2,
         ) {
-            use crate::models::rotor::TopInertia;
             let dir = DVec3::from(dir);
             prop_assume!(dir.length() > 0.1);
             let (qa, qb) = (DQuat::from_array(qa), DQuat::from_array(qb));
             prop_assume!(qa.length() > 0.1 && qb.length() > 0.1);
             let spin = if fast { 10.0 } else { 1.0 };
-            let inertia =
-                TopInertia::new(DVec3::from(potential::site_site::SPC_E_MOMENTS)).unwrap();
-            let ri = Top::start(&inertia, qa.normalize(), DVec3::from(wa) * spin).unwrap();
-            let rj = Top::start(&inertia, qb.normalize(), DVec3::from(wb) * spin).unwrap();
-            let pot = Rigid(potential::SiteSite::spc_e());
             let (r, v) = (dir.normalize() * dist, DVec3::from(v));
-            let Some(m) = pot.taylor_model(r, v, (&ri, 0.0), (&rj, 0.0), h) else {
-                return Ok(());
-            };
-            prop_assert!(m.ddx == 0.0 && m.third == 0.0 && m.spread >= 0.0);
-            let energy = |tau: f64| pot.energy(r + v * tau, &ri.pose(tau), &rj.pose(tau));
-            prop_assert!((energy(0.0) - m.x).abs() <= 1e-12 * (1.0 + m.x.abs()));
-            prop_assume!(m.x.abs() < 1e4);
-            for k in 1..=200 {
-                let tau = h * f64::from(k) / 200.0;
-                let rest = energy(tau) - m.x - m.dx * tau;
-                let bound = 0.5 * m.spread * tau * tau;
-                prop_assert!(
-                    rest.abs() <= bound + 1e-9 * (1.0 + m.x.abs()),
-                    "τ = {tau}: remainder {rest} beyond {bound} (K = {})", m.spread
-                );
-            }
+            let w = (DVec3::from(wa) * spin, DVec3::from(wb) * spin);
+            check_rigid_model(
+                &Rigid(potential::SiteSite::spc_e()),
+                DVec3::from(potential::site_site::SPC_E_MOMENTS),
+                r, v, (qa, qb), w, h,
+            )?;
+            check_rigid_model(
+                &Rigid(potential::SoftStickyDipole::ssd_e()),
+                potential::SoftStickyDipole::INERTIA,
+                r, v, (qa, qb), w, h,
+            )?;
         }
     }
 
