@@ -112,7 +112,7 @@ pub fn tops_model<P: RigidPairPotential>(
     if scene.search.as_ref().and_then(|s| s.horizon).is_none() {
         let certified = tables.iter().all(|(_, t)| t.potential().0.certifies());
         settings.horizon = if certified {
-            DEFAULT_TOP_HORIZON_WINDOWS * settings.window
+            top_horizon(scene, settings.window)
         } else {
             0.0
         };
@@ -526,6 +526,27 @@ pub const DEFAULT_HORIZON_WINDOWS: f64 = 2.0;
 /// certifying again at the virtual event beats longer jumps and the search alike
 /// (docs/PERFORMANCE.md, *Certified prediction of rigid molecules*).
 pub const DEFAULT_TOP_HORIZON_WINDOWS: f64 = 1.0 / 3.0;
+
+/// The default horizon of certified tops: [`DEFAULT_TOP_HORIZON_WINDOWS`] of a window at
+/// ΔV = kT/2 and above, shorter by `√(ΔV / (kT/2))` for finer steps (a model proves a stretch
+/// in which `Kτ²/2` stays below the gap to a level, so about `√ΔV`; measured on SPC/E: best near
+/// 0.6, 0.4 and 0.15 fs at kT/2, kT/4 and kT/16). ΔV is the finest evenly spaced step of the
+/// scene's pairs; explicit levels keep the kT/2 horizon.
+fn top_horizon(scene: &Scene, window: f64) -> f64 {
+    let kt = scene.init.temperature;
+    let step = scene
+        .pair
+        .iter()
+        .filter_map(|p| p.terraces.as_ref())
+        .filter_map(|t| t.step.or(t.step_kt.map(|x| x * kt)))
+        .fold(f64::INFINITY, f64::min);
+    let finer = if step.is_finite() && step > 0.0 {
+        (step / (0.5 * kt)).min(1.0).sqrt()
+    } else {
+        1.0
+    };
+    DEFAULT_TOP_HORIZON_WINDOWS * window * finer
+}
 
 /// Default of `search.max_change`: steps limited to where `U` is predicted to cross at most
 /// this fraction of the terrace's width (see `docs/VALIDATION.md` for the misses and the cost
