@@ -58,7 +58,7 @@
 //! ignores that the attractive pairs cannot all be at their closest at once, so it is loose
 //! (−1332 kJ/mol for SPC/E, where dimers sit at tens of kJ/mol below zero).
 
-use glam::DVec3;
+use glam::{DQuat, DVec3};
 
 use crate::certify::{RigidFlight, TaylorModel};
 use crate::error::{non_negative, positive};
@@ -431,6 +431,19 @@ impl SiteSite {
         }
     }
 
+    /// The sites' lab arms of two molecules with attitudes `q_i` and `q_j` (the first
+    /// `sites.len()` entries; the lab arms live on the stack).
+    #[inline]
+    fn lab_arms(&self, q_i: DQuat, q_j: DQuat) -> ([DVec3; MAX_SITES], [DVec3; MAX_SITES]) {
+        let mut arm_i = [DVec3::ZERO; MAX_SITES];
+        let mut arm_j = [DVec3::ZERO; MAX_SITES];
+        for (k, s) in self.sites.iter().enumerate() {
+            arm_i[k] = q_i * s.position;
+            arm_j[k] = q_j * s.position;
+        }
+        (arm_i, arm_j)
+    }
+
     /// Bounds on `|u'|` and `|u''|` of site pair `t` over site distances in `[d, R_c)`, both
     /// attained at `d` because every envelope below decreases. Coulomb, with `f = erfc(αr)/r`,
     /// `E = erfc(αr)` and `g = (2α/√π)e^{−α²r²}` (so `E' = −g`, `g' = −2α²rg`):
@@ -618,12 +631,7 @@ impl RigidPairPotential for SiteSite {
             return Ok(out);
         }
         let n = self.sites.len();
-        let mut arm_i = [DVec3::ZERO; MAX_SITES];
-        let mut arm_j = [DVec3::ZERO; MAX_SITES];
-        for (k, s) in self.sites.iter().enumerate() {
-            arm_i[k] = g.q_i * s.position;
-            arm_j[k] = g.q_j * s.position;
-        }
+        let (arm_i, arm_j) = self.lab_arms(g.q_i, g.q_j);
         let (arm_i, arm_j) = (&arm_i[..n], &arm_j[..n]);
         let rc = self.dsf.r_cut;
         for t in &self.terms {
@@ -695,12 +703,7 @@ impl RigidPairPotential for SiteSite {
             });
         }
         let n = self.sites.len();
-        let mut arm_i = [DVec3::ZERO; MAX_SITES];
-        let mut arm_j = [DVec3::ZERO; MAX_SITES];
-        for (k, s) in self.sites.iter().enumerate() {
-            arm_i[k] = f.q_i * s.position;
-            arm_j[k] = f.q_j * s.position;
-        }
+        let (arm_i, arm_j) = self.lab_arms(f.q_i, f.q_j);
         let (arm_i, arm_j) = (&arm_i[..n], &arm_j[..n]);
         let rc = self.dsf.r_cut;
         let mut k = 0.0;

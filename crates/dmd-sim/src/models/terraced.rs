@@ -491,11 +491,11 @@ enum Pending {
 /// takes over), or after 32 models. Returns the time reached (at a located crossing, the time
 /// of the model that located it), the models evaluated (0 for a potential without a model) and
 /// the located crossing, if any.
-#[inline]
 ///
 /// A model stops the jumps when it proves less than `1e-3·max_step`; a model of `U` itself
 /// (a rigid potential's, [`TaylorModel::spread`] > 0) when it proves less than `max_step`:
 /// it costs about one evaluation of `U`, as a step of the search does.
+#[inline]
 fn certified_jump(
     band: &Band,
     model_at: impl Fn(f64, f64) -> Option<TaylorModel>,
