@@ -182,15 +182,9 @@ pub struct RigidFlight {
 }
 
 impl RigidFlight {
-    /// A bound on the relative speed of a point of `i` at distance `arm_i` from its centre and
-    /// a point of `j` at `arm_j` from its centre, over the window:
-    /// `|v| + sup|ω_i| arm_i + sup|ω_j| arm_j`.
-    #[inline]
-    pub fn point_speed(&self, arm_i: f64, arm_j: f64) -> f64 {
-        self.v.length() + self.spin_i * arm_i + self.spin_j * arm_j
-    }
-
-    /// A bound on the relative acceleration of the same two points: a body point at lab arm
+    /// A bound on the relative acceleration of a point of `i` at distance `arm_i` from its
+    /// centre and a point of `j` at `arm_j` from its centre, over the window (their relative
+    /// speed is at most `|v| + sup|ω_i| arm_i + sup|ω_j| arm_j`): a body point at lab arm
     /// `A` has `Ä = ω̇ × A + ω × (ω × A)`, so `|Ä| ≤ (sup|ω̇| + sup|ω|²)|A|`; the centres do not
     /// accelerate.
     #[inline]

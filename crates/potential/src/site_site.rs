@@ -678,8 +678,8 @@ impl RigidPairPotential for SiteSite {
     }
 
     /// `U(τ) ∈ U + U̇τ ± Kτ²/2` over `[0, h]` ([`RigidPairPotential::taylor_model`]). Each
-    /// site pair's distance `d` has `Ü = Σ (u''ḋ² + u'd̈)`, with `|ḋ| ≤ S` (the flight's
-    /// [`point_speed`](RigidFlight::point_speed) of its two arms), `d ≥ d₀ − Sh` on the window
+    /// site pair's distance `d` has `Ü = Σ (u''ḋ² + u'd̈)`, with `|ḋ| ≤ S = |v| + W_i|a| +
+    /// W_j|b|` (`W` the flight's spin bounds, `a`, `b` the two arms), `d ≥ d₀ − Sh` on the window
     /// and `|d̈| = |(|ḋ_vec|² − ḋ²)/d + d̂·d̈_vec| ≤ S²/d + A` (`A` the
     /// [`point_acceleration`](RigidFlight::point_acceleration)); `|u'|` and `|u''|` are bounded
     /// at that closest distance (decreasing envelopes, tabulated every 0.01 Å). A site pair

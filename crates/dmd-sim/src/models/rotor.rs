@@ -571,9 +571,21 @@ impl TopInertia {
 
 /// A rigid body with three principal moments, moving by the exact torque-free solution.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Top(FreeMotion);
+pub struct Top {
+    motion: FreeMotion,
+    /// [`Top::spin_bounds`], computed once per motion.
+    spin: (f64, f64),
+}
 
 impl Top {
+    fn new(motion: FreeMotion) -> Self {
+        let spin = potential::certify::torque_free_bounds(
+            motion.moments().get(),
+            motion.initial_pose().omega,
+        );
+        Self { motion, spin }
+    }
+
     #[inline(always)]
     fn quat(orientation: &DMat3) -> DQuat {
         DQuat::from_mat3(orientation).normalize()
@@ -583,7 +595,7 @@ impl Top {
     /// ([`potential::certify::torque_free_bounds`]), for certified prediction.
     #[inline]
     pub fn spin_bounds(&self) -> (f64, f64) {
-        potential::certify::torque_free_bounds(self.0.moments().get(), self.0.initial_pose().omega)
+        self.spin
     }
 }
 
@@ -604,33 +616,33 @@ impl Rotor for Top {
     fn start(inertia: &TopInertia, pose: DQuat, omega: DVec3) -> Result<Self, String> {
         let body_omega = pose.normalize().inverse() * omega;
         FreeMotion::from_quat(&inertia.moments, pose, body_omega)
-            .map(Top)
+            .map(Top::new)
             .map_err(|e| e.to_string())
     }
 
     #[inline]
     fn pose(&self, dt: f64) -> DQuat {
-        Self::quat(&self.0.pose(dt).orientation)
+        Self::quat(&self.motion.pose(dt).orientation)
     }
 
     #[inline]
     fn pose_omega(&self, dt: f64) -> (DQuat, DVec3) {
-        let p = self.0.pose(dt);
+        let p = self.motion.pose(dt);
         (Self::quat(&p.orientation), p.omega_lab())
     }
 
     #[inline]
     fn omega(&self) -> DVec3 {
-        self.0.initial_pose().omega_lab()
+        self.motion.initial_pose().omega_lab()
     }
 
     fn kinetic(&self, inertia: &TopInertia) -> f64 {
-        let w = self.0.initial_pose().omega;
+        let w = self.motion.initial_pose().omega;
         0.5 * (inertia.principal * w * w).element_sum()
     }
 
     fn momentum(&self, inertia: &TopInertia) -> DVec3 {
-        let p = self.0.initial_pose();
+        let p = self.motion.initial_pose();
         p.orientation * (inertia.principal * p.omega)
     }
 
@@ -641,9 +653,9 @@ impl Rotor for Top {
     }
 
     fn reversed(&self, inertia: &TopInertia) -> Result<Self, String> {
-        let p = self.0.initial_pose();
+        let p = self.motion.initial_pose();
         FreeMotion::new(&inertia.moments, p.orientation.transpose(), -p.omega)
-            .map(Top)
+            .map(Top::new)
             .map_err(|e| e.to_string())
     }
 
@@ -665,7 +677,7 @@ impl Rotor for Top {
     /// The anchor's orientation matrix and body-frame angular velocity, from which
     /// `FreeMotion::new` builds the same motion bit for bit.
     fn write(&self, out: &mut Vec<f64>) {
-        let p = self.0.initial_pose();
+        let p = self.motion.initial_pose();
         out.extend_from_slice(&p.orientation.to_cols_array());
         out.extend_from_slice(&p.omega.to_array());
     }
@@ -680,7 +692,7 @@ impl Rotor for Top {
         let orientation = DMat3::from_cols_slice(&parts[..9]);
         let omega = DVec3::from_slice(&parts[9..]);
         FreeMotion::new(&inertia.moments, orientation.transpose(), omega)
-            .map(Top)
+            .map(Top::new)
             .map_err(|e| e.to_string())
     }
 }
