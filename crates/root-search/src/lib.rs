@@ -15,7 +15,8 @@
 //! - [`sphere_window`], the analytic times at which a linearly moving centre distance enters
 //!   and leaves the interaction sphere, which bracket each search;
 //! - [`monotone_root`], the root of a function proven monotone on a bracket (by a certificate
-//!   from outside the crate), where refinement alone suffices;
+//!   from outside the crate), where refinement alone suffices, and [`taylor_root`], the same
+//!   from a Taylor model's derivatives, which stops on the model's own error bound;
 //! - [`corpus`], adversarial indicators with known roots that test any method.
 //!
 //! Every call reports how many times it evaluated the indicator. Searches ask for a crossing
@@ -70,7 +71,7 @@ pub use bracket::{SphereWindow, sphere_window};
 pub use error::SearchError;
 pub use grid::Grid;
 pub use indicator::{Crossing, Direction, Indicator};
-pub use refine::monotone_root;
+pub use refine::{monotone_root, taylor_root};
 pub use search::{Method, Outcome, Report, Root, SearchState};
 pub use tolerance::Tolerances;
 

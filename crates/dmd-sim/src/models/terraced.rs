@@ -53,7 +53,7 @@ use potential::{
 };
 use rand_xoshiro::Xoshiro256PlusPlus;
 use rigid_free::LinearRotor;
-use root_search::{Adaptive, Crossing, Grid, Method, SearchError, SearchState, monotone_root};
+use root_search::{Adaptive, Crossing, Grid, Method, SearchError, SearchState, taylor_root};
 
 use crate::engine::event::{Boundary, Kind};
 use crate::engine::hash::mix;
@@ -882,15 +882,16 @@ impl<P: TerracedPotential> Terraced<P> {
                 certified_jump(&band, model_at, t_start, limit, self.settings.max_step);
             self.stats.taylor_models += models;
             // One crossing, proven: refine it on the coordinate itself (a model at each
-            // iterate, counted as one) instead of searching `U`.
+            // iterate, counted as one) instead of searching `U`, by the model's quadratic,
+            // stopping on its own error bound (its third-derivative bound over the bracket).
             let root = located.map(|c| {
                 let sign = if c.rising { 1.0 } else { -1.0 };
-                let coordinate = |tau: f64| match model_at(t + tau, 0.0) {
-                    Some(m) => (sign * (m.x - c.end), sign * m.dx),
-                    None => (f64::NAN, f64::NAN),
+                let coordinate = |tau: f64| match model_at(t + tau, c.within) {
+                    Some(m) => (sign * (m.x - c.end), sign * m.dx, sign * m.ddx, m.third),
+                    None => (f64::NAN, f64::NAN, f64::NAN, f64::NAN),
                 };
                 let tol = 1e-10 * self.settings.max_step;
-                let (tau, evaluations) = monotone_root(coordinate, c.from, c.within, c.guess, tol);
+                let (tau, evaluations) = taylor_root(coordinate, c.from, c.within, c.guess, tol);
                 self.stats.taylor_models += u64::from(evaluations);
                 t + tau
             });
