@@ -233,6 +233,18 @@ pub struct TaylorModel {
 }
 
 impl TaylorModel {
+    /// A model of `U` itself over a window: `U(τ) ∈ x + ẋτ ± Kτ²/2`, value and rate at the
+    /// window's start and `K = spread ≥ sup |Ü|` (the rigid potentials' models).
+    pub fn first_order(x: f64, dx: f64, spread: f64) -> Self {
+        TaylorModel {
+            x,
+            dx,
+            ddx: 0.0,
+            third: 0.0,
+            spread,
+        }
+    }
+
     /// A time `τ ∈ [0, h]` up to which `x` provably stays strictly inside `(a, b)` (0 if the
     /// model cannot prove `h / 32`, e.g. right after a crossing, with `x` on a boundary). `h`
     /// must not exceed the window the model's [`third`](Self::third) was bounded on.

@@ -694,13 +694,7 @@ impl RigidPairPotential for SiteSite {
         let vrel = f.v.length();
         // Centres that stay beyond the molecular cut-off: U ≡ 0 on the whole window.
         if f.r.length() - vrel * h >= self.cutoff {
-            return Some(TaylorModel {
-                x,
-                dx,
-                ddx: 0.0,
-                third: 0.0,
-                spread: 0.0,
-            });
+            return Some(TaylorModel::first_order(x, dx, 0.0));
         }
         let n = self.sites.len();
         let (arm_i, arm_j) = self.lab_arms(f.q_i, f.q_j);
@@ -721,13 +715,7 @@ impl RigidPairPotential for SiteSite {
             let (d1, d2) = self.derivative_bounds_at(index, t, d_lo);
             k += d2 * speed * speed + d1 * (speed * speed / d_lo + accel);
         }
-        k.is_finite().then_some(TaylorModel {
-            x,
-            dx,
-            ddx: 0.0,
-            third: 0.0,
-            spread: k,
-        })
+        k.is_finite().then_some(TaylorModel::first_order(x, dx, k))
     }
 
     #[inline]

@@ -522,13 +522,7 @@ impl RigidPairPotential for SoftStickyDipole {
         let scale = |k: f64, a: B| -> B { (k * a.0, k * a.1, k * a.2) };
         let e = self.evaluate(&RigidGeometry::new(f.r, f.q_i, f.q_j)).ok()?;
         let (x, dx) = (e.energy, e.rate(f.v, f.w_i, f.w_j));
-        let model = |spread| TaylorModel {
-            x,
-            dx,
-            ddx: 0.0,
-            third: 0.0,
-            spread,
-        };
+        let model = |spread| TaylorModel::first_order(x, dx, spread);
         let speed = f.v.length();
         let r0 = f.r.length();
         let (lo, hi) = (r0 - speed * h, r0 + speed * h);
