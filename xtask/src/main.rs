@@ -5,7 +5,7 @@
 //!   rewrites its own section of `docs/VALIDATION.md` (with `--quick`, a reduced run whose report
 //!   goes to `target/validate-quick/` so CI never edits tracked files).
 //! - `frontier [--quick]`: shorthand for `validate --only frontier [--quick]`, the error-against-cost
-//!   frontier of DMD and SMD on the paper's rods.
+//!   frontier of DMD and SMD on the paper's rods (dense and gas) and on SSD/E water.
 //! - `bench [--only NAME,..]`: the criterion benchmarks of `benches/`.
 //! - `fuzz [--minutes M] [--only TARGET,..] [--seed S]`: the fuzz targets of the input surface
 //!   (scene, `--set`, XYZ start file, checkpoint), each for `M` minutes.
@@ -30,7 +30,7 @@ commands:
   validate [--quick] [--only NAME[,NAME..]] [--list]
                              run validation checks; full runs rewrite docs/VALIDATION.md sections
   frontier [--quick]         the same as `validate --only frontier [--quick]`: DMD against SMD,
-                             error against cost on the paper's rods
+                             error against cost on the paper's rods and SSD/E water
   bench [--only NAME[,NAME..]] [-- CRITERION ARGS]
                              run the criterion benchmarks in benches/
   fuzz [--minutes M] [--only TARGET[,TARGET..]] [--seed S]

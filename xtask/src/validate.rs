@@ -161,7 +161,7 @@ pub(crate) const CHECKS: &[Check] = &[
     },
     Check {
         name: "frontier",
-        title: "The error-against-cost frontier: DMD at several ΔV and level rules against SMD at several time steps, dense fluid and gas",
+        title: "The error-against-cost frontier: DMD at several ΔV and level rules against SMD at several time steps, dense fluid, gas and SSD/E water",
         package: "dmd-sim",
         example: "validate_frontier",
         full: &[],

@@ -225,7 +225,17 @@ pub(crate) fn matched_cost(pts: &[(f64, f64)], err: f64) -> (Bound, f64) {
 pub(crate) fn matched_ratio(smd: &[(f64, f64)], err: f64, floor: f64, dmd_cost: f64) -> String {
     let below = if err <= floor { " (unresolved)" } else { "" };
     let (bound, cost) = matched_cost(smd, err);
-    format!("{}{:.2}{below}", bound_mark(bound), cost / dmd_cost)
+    format!("{}{}{below}", bound_mark(bound), ratio(cost / dmd_cost))
+}
+
+/// A cost ratio as text: two decimals from 0.1 on, three significant digits below (water's
+/// ratios are hundredths and thousandths).
+pub(crate) fn ratio(x: f64) -> String {
+    if !(x.is_finite() && x > 0.0) || x >= 0.1 {
+        return format!("{x:.2}");
+    }
+    let digits = (2.0 - x.log10().floor()) as usize;
+    format!("{x:.digits$}")
 }
 
 /// `≤ ` or `≥ ` before a bound, nothing before an interpolated value.
