@@ -443,42 +443,20 @@ impl StatePoint {
         } else {
             vec![Levels::paper(0.5), Levels::paper(0.25)]
         };
+        // SSD/E's protocol (start frame, thermostat, sampling, SMD steps, verification grid),
+        // shorter runs.
         StatePoint {
             key: "spce",
             title: "SPC/E water: 512 molecules, 298.15 K, 0.997 g/cm³",
             short: "SPC/E water",
             scene: SPCE,
             overrides: vec!["species.0.count=512".to_owned()],
-            start_ps: Some(if quick { 2.0 } else { 10.0 }),
-            dmd_equilibration: vec!["thermostat.rate=20".to_owned()],
             eq_ps: if quick { 0.05 } else { 0.15 },
             ps: if quick { 0.1 } else { 0.8 },
-            sample_ps: 0.004,
             msd_lag_ps: if quick { 0.05 } else { 0.4 },
-            rdf_bins: 200,
-            rdf_max: 10.0,
-            rdf_every: 4,
-            skin: None,
-            ref_dt: 0.5,
-            // Five reference runs in the quick check too: three set too narrow a noise.
-            twins: 4,
-            dts: if quick {
-                vec![2.0]
-            } else {
-                vec![4.0, 2.0, 1.0]
-            },
             dmd,
-            repeat: None,
-            verify_ps: if quick {
-                (0.001, 0.002)
-            } else {
-                (0.002, 0.004)
-            },
-            verify_step: 2e-5,
-            drift_max: DRIFT_MAX_WATER,
-            comparator: Comparator::Step(2.0, "the scene's step"),
             ratio_steps: vec![0.5, 0.25],
-            ratio_note: "",
+            ..Self::water(quick)
         }
     }
 

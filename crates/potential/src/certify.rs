@@ -368,7 +368,7 @@ impl TaylorModel {
     /// lower bound (`− Mτ³/6`) passes it. Where [`safe_time`](Self::safe_time) proves nothing
     /// (right after a crossing, or a crossing ahead) this proves the way to the next level or
     /// the level's crossing itself, which then needs no search, only refinement
-    /// (`root_search::monotone_root`).
+    /// (`root_search::taylor_root`).
     pub fn monotone(&self, a: f64, b: f64, h: f64) -> Proof {
         let Some(Oriented {
             rising,

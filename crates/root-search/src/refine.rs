@@ -212,11 +212,7 @@ pub fn monotone_root<G: FnMut(f64) -> (f64, f64)>(
     tol: f64,
 ) -> (f64, u32) {
     let (mut lo, mut hi) = (lo, hi);
-    let mut t = if guess > lo && guess < hi {
-        guess
-    } else {
-        0.5 * (lo + hi)
-    };
+    let mut t = start(lo, hi, guess);
     let mut evaluations = 0;
     // Each step at least halves the bracket or is a Newton step inside it: 200 bounds any
     // bracket of doubles.
@@ -226,23 +222,50 @@ pub fn monotone_root<G: FnMut(f64) -> (f64, f64)>(
         if f == 0.0 {
             return (t, evaluations);
         }
-        if f < 0.0 {
-            lo = t;
-        } else {
-            hi = t;
-        }
-        let newton = t - f / df;
-        let next = if df > 0.0 && newton > lo && newton < hi {
-            newton
-        } else {
-            0.5 * (lo + hi)
-        };
-        if (next - t).abs() <= tol + 2.0 * f64::EPSILON * t.abs() || hi - lo <= tol {
-            return (next.clamp(lo, hi), evaluations);
+        shrink(&mut lo, &mut hi, t, f);
+        let (next, done) = safeguarded_newton(t, f, df, (lo, hi), tol);
+        if done {
+            return (next, evaluations);
         }
         t = next;
     }
     (t, evaluations)
+}
+
+/// Where refinement starts: `guess` if it lies inside `(lo, hi)`, else the middle.
+fn start(lo: f64, hi: f64, guess: f64) -> f64 {
+    if guess > lo && guess < hi {
+        guess
+    } else {
+        0.5 * (lo + hi)
+    }
+}
+
+/// Moves the end of the bracket on `f`'s side to `t` (`f < 0` below the root).
+fn shrink(lo: &mut f64, hi: &mut f64, t: f64, f: f64) {
+    if f < 0.0 {
+        *lo = t;
+    } else {
+        *hi = t;
+    }
+}
+
+/// The Newton step from `t`, kept inside the bracket `(lo, hi)` (bisection when it would leave
+/// it, as 000 §III.A demands of Newton results), and whether it ends the refinement: the step
+/// below `tol` plus round-off of `t`, or the bracket below `tol`; the point is then clamped
+/// into the bracket.
+fn safeguarded_newton(t: f64, f: f64, df: f64, (lo, hi): (f64, f64), tol: f64) -> (f64, bool) {
+    let newton = t - f / df;
+    let next = if df > 0.0 && newton > lo && newton < hi {
+        newton
+    } else {
+        0.5 * (lo + hi)
+    };
+    if (next - t).abs() <= tol + 2.0 * f64::EPSILON * t.abs() || hi - lo <= tol {
+        (next.clamp(lo, hi), true)
+    } else {
+        (next, false)
+    }
 }
 
 /// [`monotone_root`] for a `g` whose second derivative and a bound on its third are known:
@@ -264,11 +287,7 @@ pub fn taylor_root<G: FnMut(f64) -> (f64, f64, f64, f64)>(
     tol: f64,
 ) -> (f64, u32) {
     let (mut lo, mut hi) = (lo, hi);
-    let mut t = if guess > lo && guess < hi {
-        guess
-    } else {
-        0.5 * (lo + hi)
-    };
+    let mut t = start(lo, hi, guess);
     let mut evaluations = 0;
     for _ in 0..200 {
         let (f, df, ddf, c3) = g(t);
@@ -276,11 +295,7 @@ pub fn taylor_root<G: FnMut(f64) -> (f64, f64, f64, f64)>(
         if f == 0.0 {
             return (t, evaluations);
         }
-        if f < 0.0 {
-            lo = t;
-        } else {
-            hi = t;
-        }
+        shrink(&mut lo, &mut hi, t, f);
         let floor = tol + 2.0 * f64::EPSILON * t.abs();
         // The nearer root of f + f'δ + f''δ²/2, cancellation-free: δ = −2f / (f' + √(f'² − 2ff'')).
         let disc = df * df - 2.0 * f * ddf;
@@ -297,14 +312,9 @@ pub fn taylor_root<G: FnMut(f64) -> (f64, f64, f64, f64)>(
                 continue;
             }
         }
-        let newton = t - f / df;
-        let next = if df > 0.0 && newton > lo && newton < hi {
-            newton
-        } else {
-            0.5 * (lo + hi)
-        };
-        if (next - t).abs() <= floor || hi - lo <= tol {
-            return (next.clamp(lo, hi), evaluations);
+        let (next, done) = safeguarded_newton(t, f, df, (lo, hi), tol);
+        if done {
+            return (next, evaluations);
         }
         t = next;
     }
