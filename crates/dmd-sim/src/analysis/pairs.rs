@@ -1,13 +1,16 @@
-//! The pairs of a sampled configuration: one cell-list loop over every pair within a distance
-//! at the minimum image, shared by g(r) and the smooth estimators, and the binning the g(r)s of
+//! The pairs of a sampled configuration: one loop (by cells, or over all pairs in small boxes)
+//! over every pair within a distance at the minimum image, shared by g(r) and the smooth estimators, and the binning the g(r)s of
 //! centres and of sites share.
 
 use glam::DVec3;
 
 /// Calls `f(i, j, d)` once for every unordered pair `{i, j}` of `pos` (positions wrapped into
 /// the box `l`) closer than `r_max`, with `d = pos[i] − pos[j]` at the minimum image. When three
-/// cells at least `r_max` wide fit along every axis: [`cell_pairs`]. Else all pairs,
-/// [`all_pairs`]. Both visit the pairs in a fixed order, so sums over them are reproducible.
+/// cells at least `r_max` wide fit along every axis and the 27 cells around one hold less than
+/// a quarter of the box: [`cell_pairs`]. Else all pairs, [`all_pairs`]: with fewer cells the
+/// stencil checks nearly every pair anyway, one at a time, where all pairs go four or eight to
+/// a vector instruction. Both visit the pairs in a fixed order, so sums over them are
+/// reproducible.
 pub(crate) fn for_each_pair(
     pos: &[DVec3],
     l: DVec3,
@@ -15,7 +18,7 @@ pub(crate) fn for_each_pair(
     f: impl FnMut(usize, usize, DVec3),
 ) {
     let dims: [usize; 3] = std::array::from_fn(|a| ((l[a] / r_max).floor() as usize).max(1));
-    if dims.iter().all(|&d| d >= 3) {
+    if dims.iter().all(|&d| d >= 3) && dims.iter().product::<usize>() > 4 * 27 {
         cell_pairs(pos, l, r_max, dims, f);
     } else {
         all_pairs(pos, l, r_max, f);
