@@ -1,6 +1,6 @@
 //! The pairs of a sampled configuration: one loop (by cells, or over all pairs in small boxes)
-//! over every pair within a distance at the minimum image, shared by g(r) and the smooth estimators, and the binning the g(r)s of
-//! centres and of sites share.
+//! over every pair within a distance at the minimum image, shared by g(r) and the smooth
+//! estimators, and the binning the g(r)s of centres and of sites share.
 
 use glam::DVec3;
 
@@ -30,7 +30,6 @@ pub(crate) fn for_each_pair(
 /// cell with its periodic shift (no pair needs its image chosen). The neighbours along each
 /// axis come from a table and empty cells are skipped before their stencil: in a gas (a cell
 /// or two per body) the stencil's index arithmetic, not the distances, was the loop's cost.
-/// Never `round`: a libm call without SSE4.1.
 fn cell_pairs(
     pos: &[DVec3],
     l: DVec3,
@@ -136,11 +135,12 @@ fn cell_pairs(
     }
 }
 
-/// Every pair, for boxes under three cut-offs wide. The distances of a block of partners are
-/// computed first, from coordinates in separate arrays and with the image chosen by a
-/// comparison turned into a factor (no branch), so the loop runs in vector registers; `f` is
-/// then called for the pairs within `r_max`, with the same `d`. A branch per axis, taken at
-/// random, made this loop ten times slower than its arithmetic.
+/// Every pair, for boxes too small for [`cell_pairs`] to pay. The distances of a block of
+/// partners are computed first, from coordinates in separate arrays and with the image chosen
+/// by a comparison turned into a factor (no branch; never `round`, a libm call without
+/// SSE4.1), so the loop runs in vector registers; `f` is then called for the pairs within
+/// `r_max`, with the same `d` recomputed. A branch per axis, taken at random, made this loop
+/// ten times slower than its arithmetic.
 fn all_pairs(pos: &[DVec3], l: DVec3, r_max: f64, mut f: impl FnMut(usize, usize, DVec3)) {
     const BLOCK: usize = 64;
     let n = pos.len();
@@ -233,9 +233,9 @@ mod tests {
 
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(200))]
-        /// Both paths (cells where three cut-offs fit along every axis, all pairs elsewhere)
-        /// find exactly the pairs within the cut-off, each once, with the minimum-image
-        /// separation, in dilute and crowded boxes, cubic or not.
+        /// Both paths (cells in boxes many cut-offs wide, all pairs in small ones) find exactly
+        /// the pairs within the cut-off, each once, with the minimum-image separation, in
+        /// dilute and crowded boxes, cubic or not.
         #[test]
         fn every_pair_within_the_cut_off_once_at_its_minimum_image(
             n in 0usize..160,
