@@ -158,6 +158,13 @@ pub trait RigidPairPotential {
     fn certifies(&self) -> bool {
         false
     }
+
+    /// Whether engines use the models by default (a search horizon above zero) or only when a
+    /// scene asks for them: [`certifies`](Self::certifies) unless the implementation measured
+    /// its models to cost more than the root search they replace.
+    fn certifies_by_default(&self) -> bool {
+        self.certifies()
+    }
 }
 
 /// [`RigidPairPotential::reach`] from monotone envelopes of `U` (the site-based potentials):
@@ -216,6 +223,9 @@ impl<P: RigidPairPotential + ?Sized> RigidPairPotential for &P {
     #[inline]
     fn certifies(&self) -> bool {
         (**self).certifies()
+    }
+    fn certifies_by_default(&self) -> bool {
+        (**self).certifies_by_default()
     }
 }
 

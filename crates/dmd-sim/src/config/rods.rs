@@ -110,7 +110,9 @@ pub fn tops_model<P: RigidPairPotential>(
     };
     let mut settings = search_settings(scene);
     if scene.search.as_ref().and_then(|s| s.horizon).is_none() {
-        let certified = tables.iter().all(|(_, t)| t.potential().0.certifies());
+        let certified = tables
+            .iter()
+            .all(|(_, t)| t.potential().0.certifies_by_default());
         settings.horizon = if certified {
             top_horizon(scene, settings.window)
         } else {
@@ -519,8 +521,8 @@ pub(crate) fn terrace_map<P: PairPotential, F: Fn(f64) -> f64>(
 /// one call (measured on the paper's rods, docs/PERFORMANCE.md).
 pub const DEFAULT_HORIZON_WINDOWS: f64 = 2.0;
 
-/// Default of `search.horizon` for rigid tops on a potential with models (the water models;
-/// elsewhere the horizon is 0), in windows. A model of `U` itself costs about
+/// Default of `search.horizon` for rigid tops on a potential whose models pay (the water
+/// models; elsewhere, the biaxial Gay–Berne included, the horizon is 0), in windows. A model of `U` itself costs about
 /// one evaluation and proves short stretches; on water each molecule changes every fraction of
 /// a femtosecond, so proving a third of a window (0.67 fs on SPC/E and SSD/E) with one model and
 /// certifying again at the virtual event beats longer jumps and the search alike
