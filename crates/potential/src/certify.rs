@@ -211,6 +211,56 @@ pub fn torque_free_bounds(moments: [f64; 3], omega_body: DVec3) -> (f64, f64) {
     (spin, c * spin * spin / 3f64.sqrt())
 }
 
+/// Bounds `(sup|f|, sup|ḟ|, sup|f̈|)` on a factor of a pair energy over a window, from which
+/// the rigid potentials build `K ≥ sup|Ü|`: products follow the product rule
+/// `(fg)¨ = f̈g + 2ḟġ + fg̈` (each bound of a product is a bound of the product's derivative),
+/// sums add, and a constant scales all three.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Rates(pub f64, pub f64, pub f64);
+
+impl Rates {
+    /// A constant factor of size at most `size`.
+    pub const fn constant(size: f64) -> Self {
+        Rates(size, 0.0, 0.0)
+    }
+
+    /// A function of the centre distance `r` along a straight flight with relative speed
+    /// `speed` that stays at `r ≥ r_lo`, from bounds `f0, f1, f2` on `|f|, |f'|, |f''|` over
+    /// the distances it reaches: `|ṙ| ≤ |v|` and `|r̈| ≤ |v|²/r_lo`.
+    pub fn radial(f0: f64, f1: f64, f2: f64, speed: f64, r_lo: f64) -> Self {
+        let v2 = speed * speed;
+        Rates(f0, f1 * speed, f2 * v2 + f1 * v2 / r_lo)
+    }
+}
+
+impl std::ops::Mul for Rates {
+    type Output = Rates;
+    #[inline]
+    fn mul(self, b: Rates) -> Rates {
+        Rates(
+            self.0 * b.0,
+            self.1 * b.0 + self.0 * b.1,
+            self.2 * b.0 + 2.0 * self.1 * b.1 + self.0 * b.2,
+        )
+    }
+}
+
+impl std::ops::Mul<Rates> for f64 {
+    type Output = Rates;
+    #[inline]
+    fn mul(self, b: Rates) -> Rates {
+        Rates(self * b.0, self * b.1, self * b.2)
+    }
+}
+
+impl std::ops::Add for Rates {
+    type Output = Rates;
+    #[inline]
+    fn add(self, b: Rates) -> Rates {
+        Rates(self.0 + b.0, self.1 + b.1, self.2 + b.2)
+    }
+}
+
 /// A second-order Taylor model of an effective coordinate `x(τ)` over a window (module
 /// documentation): value, first and second derivatives at the window's start and a bound on
 /// the third derivative over the window.

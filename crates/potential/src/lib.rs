@@ -78,7 +78,7 @@ mod terrace;
 pub mod virial;
 pub mod water;
 
-pub use certify::{FreeFlight, RigidFlight, TaylorModel};
+pub use certify::{FreeFlight, Rates, RigidFlight, TaylorModel};
 pub use error::PotentialError;
 pub use gay_berne::GayBerne;
 pub use lennard_jones::LennardJones;

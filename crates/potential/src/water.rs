@@ -52,7 +52,7 @@
 
 use glam::{DQuat, DVec3};
 
-use crate::certify::{RigidFlight, TaylorModel};
+use crate::certify::{Rates, RigidFlight, TaylorModel};
 use crate::error::{non_negative, positive};
 use crate::lennard_jones::energy_and_virial;
 use crate::pair::{Invariants, Partials, assemble};
@@ -509,17 +509,6 @@ impl RigidPairPotential for SoftStickyDipole {
     /// `|∇| ≤ 2.31` and `‖∇²‖ ≤ √32` on the unit ball, `(c_z − 0.6)²(c_z + 0.8)²` has `|′| ≤
     /// 3.168` and `|″| ≤ 12.56` on `[−1, 1]`. `None` inside half a diameter.
     fn taylor_model(&self, f: &RigidFlight, h: f64) -> Option<TaylorModel> {
-        // (|f|, |ḟ|, |f̈|) of a factor and the product and sum rules.
-        type B = (f64, f64, f64);
-        let mul = |a: B, b: B| -> B {
-            (
-                a.0 * b.0,
-                a.1 * b.0 + a.0 * b.1,
-                a.2 * b.0 + 2.0 * a.1 * b.1 + a.0 * b.2,
-            )
-        };
-        let add = |a: B, b: B| -> B { (a.0 + b.0, a.1 + b.1, a.2 + b.2) };
-        let scale = |k: f64, a: B| -> B { (k * a.0, k * a.1, k * a.2) };
         let e = self.evaluate(&RigidGeometry::new(f.r, f.q_i, f.q_j)).ok()?;
         let (x, dx) = (e.energy, e.rate(f.v, f.w_i, f.w_j));
         let model = |spread| TaylorModel::first_order(x, dx, spread);
@@ -534,12 +523,12 @@ impl RigidPairPotential for SoftStickyDipole {
         }
         let v2 = speed * speed;
         // A radial factor from sup |f|, |f'|, |f''| over [lo, hi].
-        let radial = |f0: f64, f1: f64, f2: f64| -> B { (f0, f1 * speed, f2 * v2 + f1 * v2 / lo) };
-        let switch = |c: &Cubic| -> B {
+        let radial = |f0: f64, f1: f64, f2: f64| Rates::radial(f0, f1, f2, speed, lo);
+        let switch = |c: &Cubic| {
             if hi <= c.lo {
-                (1.0, 0.0, 0.0)
+                Rates::constant(1.0)
             } else if lo >= c.hi {
-                (0.0, 0.0, 0.0)
+                Rates::constant(0.0)
             } else {
                 let w = c.hi - c.lo;
                 radial(1.0, 1.5 / w, 6.0 / (w * w))
@@ -560,7 +549,7 @@ impl RigidPairPotential for SoftStickyDipole {
         );
         let inv3 = inv * inv * inv;
         let r3 = radial(inv3, 3.0 * inv3 * inv, 12.0 * inv3 * inv * inv);
-        let angular: B = (
+        let angular = Rates(
             2.0,
             (wi + wj) + 3.0 * ((wi + n1) + (wj + n1)),
             (ai + 2.0 * wi * wj + aj)
@@ -569,22 +558,22 @@ impl RigidPairPotential for SoftStickyDipole {
                         + 2.0 * (wi + n1) * (wj + n1)
                         + (aj + 2.0 * wj * n1 + n2)),
         );
-        let dipole = scale(self.mu2, mul(r3, angular));
-        let mut k = mul(switch(&self.g), add(lj, dipole)).2;
+        let dipole = self.mu2 * (r3 * angular);
+        let mut k = (switch(&self.g) * (lj + dipole)).2;
         // The sticky terms of both molecules.
         if lo < self.sticky_range {
             let direction = |w: f64, a: f64| (n1 + w, n2 + 2.0 * w * n1 + a);
             let ((ci1, ci2), (cj1, cj2)) = (direction(wi, ai), direction(wj, aj));
-            let tetra = |c1: f64, c2: f64| -> B {
-                (0.5 * W_MAX, 2.31 * c1, 32f64.sqrt() * c1 * c1 + 2.31 * c2)
+            let tetra = |c1: f64, c2: f64| {
+                Rates(0.5 * W_MAX, 2.31 * c1, 32f64.sqrt() * c1 * c1 + 2.31 * c2)
             };
-            let correction = |c1: f64, c2: f64| -> B {
-                (W_PRIME_PART_MAX, 3.168 * c1, 12.56 * c1 * c1 + 3.168 * c2)
+            let correction = |c1: f64, c2: f64| {
+                Rates(W_PRIME_PART_MAX, 3.168 * c1, 12.56 * c1 * c1 + 3.168 * c2)
             };
-            let w = add(tetra(ci1, ci2), tetra(cj1, cj2));
-            let wp = add(correction(ci1, ci2), correction(cj1, cj2));
-            k += 0.5 * self.p.nu0 * mul(switch(&self.s), w).2
-                + 0.5 * self.p.nu0_prime * mul(switch(&self.s_prime), wp).2;
+            let w = tetra(ci1, ci2) + tetra(cj1, cj2);
+            let wp = correction(ci1, ci2) + correction(cj1, cj2);
+            k += 0.5 * self.p.nu0 * (switch(&self.s) * w).2
+                + 0.5 * self.p.nu0_prime * (switch(&self.s_prime) * wp).2;
         }
         k.is_finite().then(|| model(k))
     }

@@ -65,7 +65,7 @@
 
 use glam::{DMat3, DVec3};
 use potential::{
-    PairEval, PotentialError, RigidFlight, RigidGeometry, RigidPairPotential, TaylorModel,
+    PairEval, PotentialError, Rates, RigidFlight, RigidGeometry, RigidPairPotential, TaylorModel,
 };
 
 use super::Kind;
@@ -215,14 +215,6 @@ impl BiaxialGayBerne {
     /// rule; each bound is taken over the range its factor can reach in the window from its
     /// start value, so that short windows give local bounds.
     fn spread(&self, f: &RigidFlight, h: f64, lo: f64, hi: f64, start: &Terms) -> f64 {
-        type B = (f64, f64, f64);
-        let mul = |a: B, b: B| -> B {
-            (
-                a.0 * b.0,
-                a.1 * b.0 + a.0 * b.1,
-                a.2 * b.0 + 2.0 * a.1 * b.1 + a.0 * b.2,
-            )
-        };
         let speed = f.v.length();
         let v2 = speed * speed;
         // n = r̂: |ṅ| ≤ |v|/r, |n̈| ≤ 4|v|²/r².
@@ -282,7 +274,7 @@ impl BiaxialGayBerne {
             4.0 * (12.0 * rho12 + 6.0 * rho6) / d_lo,
             4.0 * (156.0 * rho12 + 42.0 * rho6) / (d_lo * d_lo),
         );
-        let lj: B = (p0, p1 * d1, p2 * d1 * d1 + p1 * d2);
+        let lj = Rates(p0, p1 * d1, p2 * d1 * d1 + p1 * d2);
         // η = η_∥ e^{−(ν/2)(L − L_∥)}, L = ln det G: L̇ = tr(G⁻¹Ġ) = Σ_a tr(Ω_a [G_a, G⁻¹]) with
         // ‖[G_a, G⁻¹]‖ = ‖G⁻¹[G_b, G_a]G⁻¹‖ ≤ m0²Δ²/2, or |tr(G⁻¹Ġ)| ≤ 3 m0 ‖Ġ‖;
         // L̈ = tr(Ġ⁻¹Ġ + G⁻¹G̈) ≤ 3(m0² t1² + m0 t2).
@@ -297,7 +289,7 @@ impl BiaxialGayBerne {
         } else {
             self.eta_aligned
         };
-        let eta: B = (eta_hi, eta_hi * a * l1, eta_hi * (a * a * l1 * l1 + a * l2));
+        let eta = eta_hi * Rates(1.0, a * l1, a * a * l1 * l1 + a * l2);
         // χ = x^μ with x = 2b, b = nᵀB⁻¹n.
         let ((b_lo, b_hi), (b1, b2)) = quadratic(self.strength, start.b);
         let power = |p: f64| (2.0 * b_lo).powf(p).max((2.0 * b_hi).powf(p));
@@ -305,15 +297,15 @@ impl BiaxialGayBerne {
             2.0 * self.mu * power(self.mu - 1.0),
             4.0 * (self.mu * (self.mu - 1.0)).abs() * power(self.mu - 2.0),
         );
-        let chi: B = (power(self.mu), c1 * b1, c2 * b1 * b1 + c1 * b2);
+        let chi = Rates(power(self.mu), c1 * b1, c2 * b1 * b1 + c1 * b2);
         // The switch: |S'| ≤ 1.5/w, |S''| ≤ 6/w² where [lo, hi] meets it.
-        let switch: B = if hi <= self.r_switch {
-            (1.0, 0.0, 0.0)
+        let switch = if hi <= self.r_switch {
+            Rates::constant(1.0)
         } else {
             let w = self.r_cut - self.r_switch;
-            (1.0, 1.5 / w * speed, 6.0 / (w * w) * v2 + 1.5 / w * v2 / lo)
+            Rates::radial(1.0, 1.5 / w, 6.0 / (w * w), speed, lo)
         };
-        self.epsilon0 * mul(switch, mul(eta, mul(chi, lj))).2
+        self.epsilon0 * (switch * eta * chi * lj).2
     }
 
     fn overlap(r: f64, what: &'static str) -> PotentialError {
