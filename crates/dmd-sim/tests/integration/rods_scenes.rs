@@ -300,3 +300,39 @@ time = 2
     assert_healthy(&s, "Gay-Berne");
     assert!(s.rotational_temperature.unwrap() > 0.5);
 }
+
+/// The shipped biaxial Gay–Berne ellipsoids use their certified models only when asked: by
+/// default no model is made (the search alone, as measured cheaper); with `search.horizon`
+/// the models jump stretches, and the jumped stretches, searched again on a grid a hundred
+/// times finer than the search step, hold no missed crossing.
+#[test]
+fn biaxial_ellipsoids_certify_only_when_asked_and_miss_nothing() {
+    let short = [
+        "run.equilibration_time=0.05",
+        "run.time=0.1",
+        "output.rdf=",
+        "output.orientation_acf=",
+        "search.verify_step=5e-5",
+    ];
+    let plain = crate::support::run_shipped("biaxial-gb.toml", &short, None);
+    let mut asked = short.to_vec();
+    asked.push("search.horizon=0.0052");
+    let cert = crate::support::run_shipped("biaxial-gb.toml", &asked, None);
+    for (s, what) in [(&plain, "default"), (&cert, "horizon")] {
+        assert_healthy(s, what);
+        let st = s.search.expect("terraced tops report their searches");
+        assert_eq!(
+            st.verify_misses + st.off_terrace + st.misfits,
+            0,
+            "{what}: {st:?}"
+        );
+        assert!(st.verified > 10_000, "{what}: {st:?}");
+    }
+    let (p, c) = (plain.search.unwrap(), cert.search.unwrap());
+    assert_eq!(p.taylor_models + p.certified_jumps, 0, "{p:?}");
+    assert!(
+        c.certified_jumps > 1_000 && c.taylor_models > c.certified_jumps,
+        "{c:?}"
+    );
+    assert!(c.evaluations < p.evaluations, "{c:?} against {p:?}");
+}
