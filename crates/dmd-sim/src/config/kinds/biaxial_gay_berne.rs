@@ -860,7 +860,7 @@ mod tests {
 
     /// The model is offered for most pairs outside the core, over about one default search
     /// step, and is not vacuous: somewhere the exact motion uses more than 0.4 % of its bound
-    /// (0.94 % at this seed), so a `K` 250 times smaller would fail the property above.
+    /// (0.91 % at this seed), so a `K` 250 times smaller would fail the property above.
     #[test]
     fn the_model_is_offered_and_not_vacuous() {
         use rand::{RngExt, SeedableRng};
