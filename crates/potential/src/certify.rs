@@ -231,6 +231,20 @@ impl Rates {
         let v2 = speed * speed;
         Rates(f0, f1 * speed, f2 * v2 + f1 * v2 / r_lo)
     }
+
+    /// The cubic switch of 003 Eq. 26, 1 up to `on` and 0 from `off`, over distances
+    /// `[r_lo, r_hi]` reached at relative speed `speed`: `|S'| ≤ 1.5/w` and `|S''| ≤ 6/w²`
+    /// (`w = off − on`) where the distances meet the switch.
+    pub fn cubic_switch(on: f64, off: f64, r_lo: f64, r_hi: f64, speed: f64) -> Self {
+        if r_hi <= on {
+            Rates::constant(1.0)
+        } else if r_lo >= off {
+            Rates::constant(0.0)
+        } else {
+            let w = off - on;
+            Rates::radial(1.0, 1.5 / w, 6.0 / (w * w), speed, r_lo)
+        }
+    }
 }
 
 impl std::ops::Mul for Rates {

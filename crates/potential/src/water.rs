@@ -524,16 +524,7 @@ impl RigidPairPotential for SoftStickyDipole {
         let v2 = speed * speed;
         // A radial factor from sup |f|, |f'|, |f''| over [lo, hi].
         let radial = |f0: f64, f1: f64, f2: f64| Rates::radial(f0, f1, f2, speed, lo);
-        let switch = |c: &Cubic| {
-            if hi <= c.lo {
-                Rates::constant(1.0)
-            } else if lo >= c.hi {
-                Rates::constant(0.0)
-            } else {
-                let w = c.hi - c.lo;
-                radial(1.0, 1.5 / w, 6.0 / (w * w))
-            }
-        };
+        let switch = |c: &Cubic| Rates::cubic_switch(c.lo, c.hi, lo, hi, speed);
         let (n1, n2) = (speed / lo, 4.0 * v2 / (lo * lo));
         let (wi, wj) = (f.spin_i, f.spin_j);
         let (ai, aj) = (f.turn_i + wi * wi, f.turn_j + wj * wj);

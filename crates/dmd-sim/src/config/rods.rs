@@ -522,11 +522,11 @@ pub(crate) fn terrace_map<P: PairPotential, F: Fn(f64) -> f64>(
 pub const DEFAULT_HORIZON_WINDOWS: f64 = 2.0;
 
 /// Default of `search.horizon` for rigid tops on a potential whose models pay (the water
-/// models; elsewhere, the biaxial Gay–Berne included, the horizon is 0), in windows. A model of `U` itself costs about
-/// one evaluation and proves short stretches; on water each molecule changes every fraction of
-/// a femtosecond, so proving a third of a window (0.67 fs on SPC/E and SSD/E) with one model and
-/// certifying again at the virtual event beats longer jumps and the search alike
-/// (docs/PERFORMANCE.md, *Certified prediction of rigid molecules*).
+/// models; elsewhere, the biaxial Gay–Berne included, the horizon is 0), in windows. A model of
+/// `U` itself costs about one evaluation and proves short stretches; on water each molecule
+/// changes every fraction of a femtosecond, so proving a third of a window (0.67 fs on SPC/E
+/// and SSD/E) with one model and certifying again at the virtual event beats longer jumps and
+/// the search alike (docs/PERFORMANCE.md, *Certified prediction of rigid molecules*).
 pub const DEFAULT_TOP_HORIZON_WINDOWS: f64 = 1.0 / 3.0;
 
 /// The default horizon of certified tops: [`DEFAULT_TOP_HORIZON_WINDOWS`] of a window at

@@ -223,10 +223,13 @@ impl BiaxialGayBerne {
         let (spin, accel) = (wi + wj, f.turn_i + f.turn_j + 2.0 * (wi * wi + wj * wj));
         // nᵀA⁻¹n for A = A_i + A_j, A_a = Σ_k d_k e_k e_kᵀ: bounds on its rates where it is at
         // most `top`, and the range it reaches in the window from `at_start`.
-        let quadratic = |d: DVec3, at_start: f64| -> ((f64, f64), (f64, f64)) {
+        // For a tensor of the d_k: Δ, m₀ and the bounds t₁ ≥ ‖Ȧ‖, t₂ ≥ ‖Ä‖.
+        let turning = |d: DVec3| {
             let spread = d.max_element() - d.min_element();
-            let (t1, t2) = (spin * spread, accel * spread);
-            let m0 = 0.5 / d.min_element();
+            (spread, 0.5 / d.min_element(), spin * spread, accel * spread)
+        };
+        let quadratic = |d: DVec3, at_start: f64| -> ((f64, f64), (f64, f64)) {
+            let (_, m0, t1, t2) = turning(d);
             let global = (0.5 / d.max_element(), m0);
             let rates = |top: f64| {
                 let kappa = (m0 * top).sqrt();
@@ -278,9 +281,7 @@ impl BiaxialGayBerne {
         // η = η_∥ e^{−(ν/2)(L − L_∥)}, L = ln det G: L̇ = tr(G⁻¹Ġ) = Σ_a tr(Ω_a [G_a, G⁻¹]) with
         // ‖[G_a, G⁻¹]‖ = ‖G⁻¹[G_b, G_a]G⁻¹‖ ≤ m0²Δ²/2, or |tr(G⁻¹Ġ)| ≤ 3 m0 ‖Ġ‖;
         // L̈ = tr(Ġ⁻¹Ġ + G⁻¹G̈) ≤ 3(m0² t1² + m0 t2).
-        let spread = self.shape.max_element() - self.shape.min_element();
-        let m0 = 0.5 / self.shape.min_element();
-        let (t1, t2) = (spin * spread, accel * spread);
+        let (spread, m0, t1, t2) = turning(self.shape);
         let l1 = (m0 * m0 * spread * spread * spin).min(3.0 * m0 * t1);
         let l2 = 3.0 * (m0 * m0 * t1 * t1 + m0 * t2);
         let a = 0.5 * self.nu;
@@ -298,13 +299,7 @@ impl BiaxialGayBerne {
             4.0 * (self.mu * (self.mu - 1.0)).abs() * power(self.mu - 2.0),
         );
         let chi = Rates(power(self.mu), c1 * b1, c2 * b1 * b1 + c1 * b2);
-        // The switch: |S'| ≤ 1.5/w, |S''| ≤ 6/w² where [lo, hi] meets it.
-        let switch = if hi <= self.r_switch {
-            Rates::constant(1.0)
-        } else {
-            let w = self.r_cut - self.r_switch;
-            Rates::radial(1.0, 1.5 / w, 6.0 / (w * w), speed, lo)
-        };
+        let switch = Rates::cubic_switch(self.r_switch, self.r_cut, lo, hi, speed);
         self.epsilon0 * (switch * eta * chi * lj).2
     }
 
